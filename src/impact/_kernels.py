@@ -1,0 +1,617 @@
+"""Exact event-driven kernels (numba).
+
+Between events every model of the study is linear with harmonic forcing, so the
+motion on a segment is known in closed form.  We keep it in *coefficient form*
+
+    x(tau) = Re sum_k cx[k] exp(kap[k] tau)
+    y(tau) = Re sum_k cy[k] exp(kap[k] tau) + py1 tau + py2 tau^2
+
+with tau the time since the segment started.  Slots 0..3 hold the homogeneous
+modes (eigenvalues of the segment's linear system), 4 and 5 the harmonic
+particular solution (exp(+-i r tau)), 6 the constant part (kap = 0).  The
+polynomial in y is the free mass's ballistic flight (CID), which the
+eigen-decomposition cannot express (a Jordan block at 0).
+
+Every event (impact, release from a wall) is the first exit of a scalar
+function of this form from a band.  :func:`first_exit` finds it with a
+certificate: on [a, b] a function with |h''| <= M2 stays within
+max(h(a), h(b)) + M2 (b-a)^2 / 8, and M2 is bounded from the coefficients
+(all homogeneous modes decay, so |exp(kap tau)| <= 1).  A step is accepted
+only when that bound keeps it inside the band, so an impact cannot be missed,
+however briefly the trajectory touches the wall.  A crossing is refined by
+safeguarded Newton once monotonicity is certified (|h'| > M2 (b-a)).
+
+Integrals over a segment (work of the force, viscous dissipation, the square
+of x for the amplitude window) are products of exponentials and are
+integrated exactly.
+
+The PID's eigen-data arrive as a tuple, the CID's as None: numba prunes the
+branch that does not apply, so a CID run never compiles the pendulum path.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+NT = 7  # coefficient slots, see module docstring
+
+MODE_FREE = 0
+MODE_STUCK = 1
+MODE_LOCKED = 2
+
+# parameter vector layout (float64 array)
+P_MU, P_BETA, P_E, P_D, P_WP, P_F, P_R, P_PHI = 0, 1, 2, 3, 4, 5, 6, 7
+P_VSTICK, P_TEND, P_TWIN, P_MAXEV, P_T0 = 8, 9, 10, 11, 12
+NPAR = 13
+
+# diagnostics vector layout
+D_IMPACTS, D_IMPACTS_WIN, D_STICKS, D_GRAZE, D_PEN = 0, 1, 2, 3, 4
+D_WORK, D_VISC, D_IMPLOSS, D_E0, D_E1, D_X2WIN = 5, 6, 7, 8, 9, 10
+D_CAP, D_NREC, D_STEPS, D_STUCKTIME, D_TEND = 11, 12, 13, 14, 15
+NDIAG = 16
+
+# record columns: t, side, x, v-, w-, v+, w+, stuck_after
+NREC = 8
+
+_HMIN = 1e-12      # smallest step before a touch is declared tangential
+_EPS = 2.220446049250313e-16
+
+
+# ----------------------------------------------------------------------------
+# evaluation of coefficient-form functions
+# ----------------------------------------------------------------------------
+
+@njit(cache=True)
+def _eval2(kap, c, p1, p2, tau):
+    """h(tau) and h'(tau) of a coefficient-form function."""
+    h = 0.0
+    dh = 0.0
+    for k in range(NT):
+        ck = c[k]
+        if ck.real != 0.0 or ck.imag != 0.0:
+            z = ck * np.exp(kap[k] * tau)
+            h += z.real
+            dh += (z * kap[k]).real
+    return h + p1 * tau + p2 * tau * tau, dh + p1 + 2.0 * p2 * tau
+
+
+@njit(cache=True)
+def _deriv_at0(kap, c, n):
+    """n-th derivative at tau = 0 of the exponential part."""
+    acc = 0.0
+    for k in range(NT):
+        z = c[k]
+        for _ in range(n):
+            z = z * kap[k]
+        acc += z.real
+    return acc
+
+
+@njit(cache=True)
+def _bound(kap, c, n):
+    """Bound on |n-th derivative| of the exponential part for tau >= 0."""
+    acc = 0.0
+    for k in range(NT):
+        acc += abs(c[k]) * abs(kap[k]) ** n
+    return acc
+
+
+@njit(cache=True)
+def _state(kap, cx, cy, py1, py2, tau, z):
+    """Write (x, x', y, y') at tau into z."""
+    x = 0.0
+    v = 0.0
+    y = 0.0
+    w = 0.0
+    for k in range(NT):
+        ek = np.exp(kap[k] * tau)
+        a = cx[k] * ek
+        b = cy[k] * ek
+        x += a.real
+        v += (a * kap[k]).real
+        y += b.real
+        w += (b * kap[k]).real
+    z[0] = x
+    z[1] = v
+    z[2] = y + py1 * tau + py2 * tau * tau
+    z[3] = w + py1 + 2.0 * py2 * tau
+
+
+# ----------------------------------------------------------------------------
+# segment construction
+# ----------------------------------------------------------------------------
+
+@njit(cache=True)
+def _oscillator(kap, cx, x0, v0, w2, two_zeta_w, amp, r, theta0):
+    """x'' + two_zeta_w x' + w2 x = amp sin(theta0 + r tau), from (x0, v0)."""
+    sigma = -0.5 * two_zeta_w
+    root = np.sqrt(complex(w2 - 0.25 * two_zeta_w * two_zeta_w, 0.0))
+    lp = sigma + 1j * root
+    lm = sigma - 1j * root
+    zp = amp / complex(w2 - r * r, two_zeta_w * r)
+    ch = zp * np.exp(1j * theta0) / 2j
+    kap[4] = 1j * r
+    kap[5] = -1j * r
+    kap[6] = 0.0
+    cx[4] = ch
+    cx[5] = ch.conjugate()
+    cx[6] = 0.0
+    xp0 = 2.0 * ch.real
+    vp0 = 2.0 * (ch * 1j * r).real
+    h0 = x0 - xp0
+    h1 = v0 - vp0
+    cp = (h1 - lm * h0) / (lp - lm)
+    kap[0] = lp
+    kap[1] = lm
+    kap[2] = 0.0
+    kap[3] = 0.0
+    cx[0] = cp
+    cx[1] = h0 - cp
+    cx[2] = 0.0
+    cx[3] = 0.0
+
+
+@njit(cache=True)
+def _build_free(kap, cx, cy, poly, z0, t0, p, pid):
+    """Free flight of the damper mass from state z0 at absolute time t0."""
+    theta0 = p[P_R] * t0 + p[P_PHI]
+    if pid is None:
+        _oscillator(kap, cx, z0[0], z0[1], 1.0, 2.0 * p[P_BETA], p[P_F], p[P_R], theta0)
+        for k in range(NT):
+            cy[k] = 0.0
+        cy[6] = z0[2]
+        poly[0] = z0[3]
+        poly[1] = 0.0
+    else:
+        lam, vec, vinv, zc = pid
+        ph = np.exp(1j * theta0)
+        rel = np.empty(4, dtype=np.complex128)
+        for i in range(4):
+            rel[i] = z0[i] - (zc[i] * ph).imag
+        for k in range(4):
+            wk = 0.0 + 0.0j
+            for i in range(4):
+                wk += vinv[k, i] * rel[i]
+            kap[k] = lam[k]
+            cx[k] = vec[0, k] * wk
+            cy[k] = vec[2, k] * wk
+        kap[4] = 1j * p[P_R]
+        kap[5] = -1j * p[P_R]
+        kap[6] = 0.0
+        cx[4] = zc[0] * ph / 2j
+        cx[5] = cx[4].conjugate()
+        cy[4] = zc[2] * ph / 2j
+        cy[5] = cy[4].conjugate()
+        cx[6] = 0.0
+        cy[6] = 0.0
+        poly[0] = 0.0
+        poly[1] = 0.0
+
+
+@njit(cache=True)
+def _build_combined(kap, cx, cy, poly, z0, t0, p, offset):
+    """Damper mass moving with the structure (stuck at a wall or locked, d = 0).
+
+    The pendulum spring is internal to the combined body, so CID and PID share
+    (1 + mu) x'' + 2 beta x' + x = F0 sin(.); y = x + offset.
+    """
+    mu = p[P_MU]
+    theta0 = p[P_R] * t0 + p[P_PHI]
+    _oscillator(kap, cx, z0[0], z0[1], 1.0 / (1.0 + mu), 2.0 * p[P_BETA] / (1.0 + mu),
+                p[P_F] / (1.0 + mu), p[P_R], theta0)
+    for k in range(NT):
+        cy[k] = cx[k]
+    cy[6] = cx[6] + offset
+    poly[0] = 0.0
+    poly[1] = 0.0
+
+
+# ----------------------------------------------------------------------------
+# event location
+# ----------------------------------------------------------------------------
+
+@njit(cache=True)
+def _refine(kap, c, p1, p2, level, side, a, b):
+    """Time of the crossing of `level` in [a, b], h monotone there.
+
+    g = side (h - level) has g(a) < 0 <= g(b).  Safeguarded Newton; returns the
+    bracket end with g >= 0 so the state is at (never before) the crossing.
+    """
+    t = 0.5 * (a + b)
+    for _ in range(200):
+        h, dh = _eval2(kap, c, p1, p2, t)
+        g = side * (h - level)
+        if g >= 0.0:
+            b = t
+        else:
+            a = t
+        if b - a <= 4.0 * _EPS * max(abs(b), 1e-300):
+            break
+        dg = side * dh
+        tn = t - g / dg if dg != 0.0 else 0.5 * (a + b)
+        if not (a < tn < b):
+            tn = 0.5 * (a + b)
+        if tn == t:
+            break
+        t = tn
+    return b
+
+
+@njit(cache=True)
+def _escape_guess(h1, h2, h3, delta):
+    """Time to move delta off a boundary by the leading Taylor term (a first step)."""
+    te = np.inf
+    if h1 != 0.0:
+        te = min(te, delta / abs(h1))
+    if h2 != 0.0:
+        te = min(te, math.sqrt(2.0 * delta / abs(h2)))
+    if h3 != 0.0:
+        te = min(te, (6.0 * delta / abs(h3)) ** (1.0 / 3.0))
+    if not te < np.inf:
+        te = _HMIN
+    return max(0.25 * te, _HMIN)
+
+
+@njit(cache=True)
+def first_exit(kap, c, p1, p2, lo, hi, tau_max, escape, delta, out):
+    """First tau in (0, tau_max] where h leaves (lo, hi).
+
+    escape = +1/-1: the function starts on hi/lo and is leaving it (after an
+    impact or a release); re-contact closer than the contact tolerance
+    `delta` is not resolved.  Writes out[0] = tau (inf if none), out[1] = side
+    (+1 hi, -1 lo, 0 none), out[2] = grazing passes, out[3] = steps taken.
+    """
+    m2 = _bound(kap, c, 2) + 2.0 * abs(p2)
+    a = 0.0
+    grazing = 0.0
+    steps = 0.0
+    if escape != 0:
+        # Leave the boundary.  For the first tiny steps h(tau) - h(0) is all
+        # round-off, so separation is proven by the Taylor expansion at 0 with
+        # its remainder; once steps are long enough, by direct evaluation.
+        bound = hi if escape > 0 else lo
+        h1 = _deriv_at0(kap, c, 1) + p1
+        h2 = _deriv_at0(kap, c, 2) + 2.0 * p2
+        h3 = _deriv_at0(kap, c, 3)
+        m4 = _bound(kap, c, 4)
+        te = _escape_guess(h1, h2, h3, delta)
+        last_clear = 0.0
+        while True:
+            if te >= tau_max:
+                out[0] = np.inf
+                out[1] = 0.0
+                out[2] = grazing
+                out[3] = steps
+                return
+            steps += 1.0
+            pred = escape * (h1 * te + 0.5 * h2 * te * te + h3 * te * te * te / 6.0)
+            if -(pred + m4 * te ** 4 / 24.0) >= delta:
+                break
+            if te > 1e3 * _HMIN:
+                hb, dhb = _eval2(kap, c, p1, p2, te)
+                clearance = escape * (bound - hb)
+                if clearance >= delta:
+                    break
+                if clearance > 0.0:
+                    last_clear = te
+                elif escape * dhb > 0.0:
+                    # back at the boundary before separating by delta
+                    if last_clear > 0.0:
+                        te = _refine(kap, c, p1, p2, bound, escape, last_clear, te)
+                    out[0] = te
+                    out[1] = escape
+                    out[2] = grazing + 1.0
+                    out[3] = steps
+                    return
+            te *= 2.0
+        a = te
+    ha, dha = _eval2(kap, c, p1, p2, a)
+    near = False
+    while a < tau_max:
+        margin = max(min(hi - ha, ha - lo), 0.0)
+        if m2 > 0.0:
+            hstep = math.sqrt(4.0 * margin / m2)
+        else:
+            hstep = tau_max
+        hstep = max(hstep, _HMIN)
+        while True:
+            b = min(a + hstep, tau_max)
+            w = b - a
+            hb, dhb = _eval2(kap, c, p1, p2, b)
+            steps += 1.0
+            if hb >= hi or hb <= lo:
+                side = 1.0 if hb >= hi else -1.0
+                monotone = side * dha - m2 * w > 0.0 or side * dhb - m2 * w > 0.0
+                if monotone or w <= _HMIN:
+                    level = hi if side > 0 else lo
+                    out[0] = _refine(kap, c, p1, p2, level, side, a, b)
+                    out[1] = side
+                    out[2] = grazing + (0.0 if monotone else 1.0)
+                    out[3] = steps
+                    return
+                hstep = 0.5 * w
+                continue
+            spread = m2 * w * w / 8.0
+            if max(ha, hb) + spread < hi and min(ha, hb) - spread > lo:
+                break
+            if w <= _HMIN:
+                break  # a tangency within round-off of the wall
+            hstep = 0.5 * w
+        # count each pass within contact tolerance of a wall once
+        close = min(hi - hb, hb - lo) < delta
+        if close and not near:
+            grazing += 1.0
+        near = close
+        a = b
+        ha = hb
+        dha = dhb
+    out[0] = np.inf
+    out[1] = 0.0
+    out[2] = grazing
+    out[3] = steps
+
+
+# ----------------------------------------------------------------------------
+# exact integrals over a segment
+# ----------------------------------------------------------------------------
+
+@njit(cache=True)
+def _int_prod(kap, ca, cb, a, b):
+    """Re of the integral over [a, b] of (sum ca e^{kap t})(sum cb e^{kap t})."""
+    if b <= a:
+        return 0.0
+    h = b - a
+    ea = np.empty(NT, dtype=np.complex128)
+    for k in range(NT):
+        ea[k] = np.exp(kap[k] * a)
+    acc = 0.0 + 0.0j
+    for j in range(NT):
+        if ca[j].real == 0.0 and ca[j].imag == 0.0:
+            continue
+        for l in range(NT):
+            if cb[l].real == 0.0 and cb[l].imag == 0.0:
+                continue
+            kk = kap[j] + kap[l]
+            zz = kk * h
+            if abs(zz) < 1e-3:
+                phi1 = h * (1.0 + zz * (0.5 + zz * (1.0 / 6.0 + zz * (1.0 / 24.0 + zz / 120.0))))
+            else:
+                phi1 = (np.exp(zz) - 1.0) / kk
+            acc += ca[j] * cb[l] * ea[j] * ea[l] * phi1
+    return acc.real
+
+
+@njit(cache=True)
+def _energy(z, p):
+    mu = p[P_MU]
+    wp = p[P_WP]
+    s = z[2] - z[0]
+    return 0.5 * (z[1] * z[1] + z[0] * z[0] + mu * z[3] * z[3] + mu * wp * wp * s * s)
+
+
+# ----------------------------------------------------------------------------
+# contact resolution
+# ----------------------------------------------------------------------------
+
+@njit(cache=True)
+def _stays_stuck(kap, cx, p, side):
+    """Whether the wall on `side` keeps holding the damper mass.
+
+    The contact force on the damper is N = mu (x'' + wp^2 side d/2) and the
+    wall on `side` can only push inwards: side*N <= 0.  Decided on the first
+    derivative of q = side*x'' + wp^2 d/2 at 0 that is clearly non-zero.
+    """
+    base = p[P_WP] ** 2 * 0.5 * p[P_D]
+    for n in range(2, 6):
+        qn = side * _deriv_at0(kap, cx, n) + (base if n == 2 else 0.0)
+        scale = _bound(kap, cx, n) + (base if n == 2 else 0.0)
+        if abs(qn) > 1e-10 * scale:
+            return qn < 0.0
+    return True
+
+
+@njit(cache=True)
+def _apply_impact(z, side, p, diag):
+    """Newton impact (Eq. 3), then stick if the rebound is below threshold.
+
+    Returns True when the relative velocity was reset to zero (sticking
+    candidate).  Momentum is conserved to round-off; losses are booked.
+    """
+    mu = p[P_MU]
+    e = p[P_E]
+    vm = z[1]
+    wm = z[3]
+    srel = wm - vm
+    z[1] = ((1.0 - mu * e) * vm + mu * (1.0 + e) * wm) / (1.0 + mu)
+    z[3] = ((1.0 + e) * vm + (mu - e) * wm) / (1.0 + mu)
+    red = 0.5 * mu / (1.0 + mu)
+    diag[D_IMPLOSS] += red * (1.0 - e * e) * srel * srel
+    z[2] = z[0] + side * 0.5 * p[P_D]
+    if abs(z[3] - z[1]) < p[P_VSTICK]:
+        _stick(z, p, diag)
+        return True
+    return False
+
+
+@njit(cache=True)
+def _stick(z, p, diag):
+    """Perfectly plastic end of a rebound: common velocity, momentum kept, loss booked."""
+    mu = p[P_MU]
+    after = z[3] - z[1]
+    vc = (z[1] + mu * z[3]) / (1.0 + mu)
+    diag[D_IMPLOSS] += 0.5 * mu / (1.0 + mu) * after * after
+    z[1] = vc
+    z[3] = vc
+
+
+# ----------------------------------------------------------------------------
+# the run
+# ----------------------------------------------------------------------------
+
+@njit(cache=True)
+def run(p, z_init, mode_init, side_init, pid, rec, diag, z_out):
+    """One run from absolute time p[P_T0] to p[P_TEND].
+
+    z_init: (x, x', y, y'); mode_init/side_init: initial contact state.
+    rec: (n, NREC) array for impact records (n may be 0).  diag: NDIAG
+    diagnostics (zeroed here).  z_out: final state; returns final mode*side
+    code (mode + 10*side) for continuation runs.
+    """
+    for i in range(NDIAG):
+        diag[i] = 0.0
+    kap = np.zeros(NT, dtype=np.complex128)
+    cx = np.zeros(NT, dtype=np.complex128)
+    cy = np.zeros(NT, dtype=np.complex128)
+    cs = np.zeros(NT, dtype=np.complex128)
+    cv = np.zeros(NT, dtype=np.complex128)
+    cq = np.zeros(NT, dtype=np.complex128)
+    cf = np.zeros(NT, dtype=np.complex128)
+    poly = np.zeros(2)
+    ev = np.zeros(4)
+    z = z_init.copy()
+    d = p[P_D]
+    half = 0.5 * d
+    t = p[P_T0]
+    t_end = p[P_TEND]
+    t_win = p[P_TWIN]
+    period = 2.0 * math.pi
+    max_ev = p[P_MAXEV]
+    mode = mode_init
+    side = side_init
+    if d == 0.0:
+        mode = MODE_LOCKED
+    escape = 0
+    diag[D_E0] = _energy(z, p)
+    count_period = 0.0
+    period_index = math.floor(t / period)
+    nrec = rec.shape[0]
+    irec = 0
+    while t < t_end:
+        tau_max = t_end - t
+        if mode == MODE_FREE:
+            _build_free(kap, cx, cy, poly, z, t, p, pid)
+        else:
+            _build_combined(kap, cx, cy, poly, z, t, p, side * half if mode == MODE_STUCK else 0.0)
+            if mode == MODE_STUCK and not _stays_stuck(kap, cx, p, side):
+                mode = MODE_FREE
+                escape = side
+                continue
+        for k in range(NT):
+            cv[k] = cx[k] * kap[k]
+        # locate the next event
+        if mode == MODE_FREE:
+            for k in range(NT):
+                cs[k] = cy[k] - cx[k]
+            delta = 1e-12 * (_bound(kap, cs, 0) + d)
+            first_exit(kap, cs, poly[0], poly[1], -half, half, tau_max, escape, delta, ev)
+        elif mode == MODE_STUCK:
+            for k in range(NT):
+                cq[k] = side * cx[k] * kap[k] * kap[k]
+            level = -p[P_WP] ** 2 * half
+            delta = 1e-12 * (_bound(kap, cq, 0) - level)
+            # just stuck with the contact force at round-off from zero: the
+            # force is known to grow (see _stays_stuck), so leave that edge
+            q0 = _deriv_at0(kap, cq, 0)
+            esc = 1 if level - q0 < delta else 0
+            first_exit(kap, cq, 0.0, 0.0, -np.inf, level, tau_max, esc, delta, ev)
+        else:
+            ev[0] = np.inf
+            ev[1] = 0.0
+            ev[2] = 0.0
+            ev[3] = 0.0
+        tau = min(ev[0], tau_max)
+        diag[D_GRAZE] += ev[2]
+        diag[D_STEPS] += ev[3]
+        # exact integrals over the segment
+        theta0 = p[P_R] * t + p[P_PHI]
+        cf[4] = p[P_F] * np.exp(1j * theta0) / 2j
+        cf[5] = cf[4].conjugate()
+        diag[D_WORK] += _int_prod(kap, cf, cv, 0.0, tau)
+        diag[D_VISC] += 2.0 * p[P_BETA] * _int_prod(kap, cv, cv, 0.0, tau)
+        if t + tau > t_win:
+            diag[D_X2WIN] += _int_prod(kap, cx, cx, max(t_win - t, 0.0), tau)
+        if mode != MODE_FREE:
+            diag[D_STUCKTIME] += tau
+        _state(kap, cx, cy, poly[0], poly[1], tau, z)
+        t = t + tau
+        escape = 0
+        if ev[0] > tau_max:
+            break
+        # period bookkeeping for the event cap
+        pi_now = math.floor(t / period)
+        if pi_now != period_index:
+            period_index = pi_now
+            count_period = 0.0
+        count_period += 1.0
+        if count_period > max_ev:
+            diag[D_CAP] = 1.0
+            break
+        ev_side = int(ev[1])
+        if mode == MODE_STUCK:
+            # release: the wall stops holding the mass, which leaves with s' = 0
+            mode = MODE_FREE
+            z[2] = z[0] + side * half
+            z[3] = z[1]
+            escape = side
+            continue
+        # impact on wall ev_side
+        s_now = z[2] - z[0]
+        pen = abs(s_now) - half
+        if pen > diag[D_PEN]:
+            diag[D_PEN] = pen
+        approach = ev_side * (z[3] - z[1])
+        vm = z[1]
+        wm = z[3]
+        if approach <= 0.0:
+            # touched within contact tolerance while already separating
+            z[2] = z[0] + ev_side * half
+            escape = ev_side
+            continue
+        diag[D_IMPACTS] += 1.0
+        if t >= t_win:
+            diag[D_IMPACTS_WIN] += 1.0
+        stuck = _apply_impact(z, ev_side, p, diag)
+        side = ev_side
+        if not stuck:
+            # a rebound whose excursion v^2 / (2 a) cannot clear the contact
+            # tolerance is unresolvable: the mass stays at the wall
+            _build_free(kap, cx, cy, poly, z, t, p, pid)
+            for k in range(NT):
+                cs[k] = cy[k] - cx[k]
+            push = side * (_deriv_at0(kap, cs, 2) + 2.0 * poly[1])
+            rebound = z[3] - z[1]
+            tol = 1e-12 * (_bound(kap, cs, 0) + d)
+            if push > 0.0 and rebound * rebound < 2.0 * tol * push:
+                _stick(z, p, diag)
+                stuck = True
+        if stuck:
+            # decide whether the wall holds the mass
+            _build_combined(kap, cx, cy, poly, z, t, p, side * half)
+            if _stays_stuck(kap, cx, p, side):
+                mode = MODE_STUCK
+                diag[D_STICKS] += 1.0
+            else:
+                mode = MODE_FREE
+                escape = side
+        else:
+            mode = MODE_FREE
+            escape = side
+        if irec < nrec:
+            rec[irec, 0] = t
+            rec[irec, 1] = side
+            rec[irec, 2] = z[0]
+            rec[irec, 3] = vm
+            rec[irec, 4] = wm
+            rec[irec, 5] = z[1]
+            rec[irec, 6] = z[3]
+            rec[irec, 7] = 1.0 if mode == MODE_STUCK else 0.0
+            irec += 1
+    diag[D_E1] = _energy(z, p)
+    diag[D_NREC] = irec
+    diag[D_TEND] = t
+    for i in range(4):
+        z_out[i] = z[i]
+    return mode + 10 * side

@@ -1,0 +1,207 @@
+"""Command-line entry point `impact`: try a case without Snakemake.
+
+Each sub-command prints one JSON object on stdout.  Flags are named after the
+model's symbols (model.md); a value out of range is refused with a message
+naming the flag and exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+from .params import STARTS, ParameterError, Protocol, System
+
+DEFAULTS = dict(mu=0.01, beta=0.0048, e=0.25, gap_ratio=1.0, force_ratio=0.096)
+
+
+def _ranged(lo: float, hi: float, *, lo_open=False, hi_open=False, kind=float):
+    """An argparse type accepting numbers in [lo, hi] (open ends as asked)."""
+
+    def parse(text: str):
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        bad_lo = value <= lo if lo_open else value < lo
+        bad_hi = value >= hi if hi_open else value > hi
+        if not math.isfinite(value) or bad_lo or bad_hi:
+            lb, rb = "(" if lo_open else "[", ")" if hi_open else "]"
+            raise argparse.ArgumentTypeError(f"{value} is out of range: allowed {lb}{lo}, {hi}{rb}")
+        return value
+
+    return parse
+
+
+def _model_flags(ap: argparse.ArgumentParser) -> None:
+    g = ap.add_argument_group("model (model units: M = 1, omega = 1)")
+    g.add_argument("--damper", choices=("cid", "pid"), default="cid",
+                   help="classical (free mass) or pendulum impact damper (default cid)")
+    g.add_argument("--mu", type=_ranged(0, 10, lo_open=True), default=DEFAULTS["mu"],
+                   help="mass ratio m/M, in (0, 10] (default 0.01)")
+    g.add_argument("--beta", type=_ranged(0, 1, lo_open=True, hi_open=True), default=DEFAULTS["beta"],
+                   help="structural damping ratio, in (0, 1) (default 0.0048)")
+    g.add_argument("--e", type=_ranged(0, 1), default=DEFAULTS["e"],
+                   help="coefficient of restitution, in [0, 1] (default 0.25)")
+    g.add_argument("--gap-ratio", type=_ranged(0, 1e6), default=DEFAULTS["gap_ratio"],
+                   help="g = d / A_max, total clearance over the bare resonant amplitude, in [0, 1e6] (default 1)")
+    g.add_argument("--rp", type=_ranged(0, 1e4, lo_open=True), default=None,
+                   help="PID tuning r' = omega_p/omega, in (0, 1e4] (default 1.0 for the PID; not used by the CID)")
+    g.add_argument("--force-ratio", type=_ranged(0, 1e12, lo_open=True), default=DEFAULTS["force_ratio"],
+                   help="F0/K, static deflection under the force amplitude, > 0 (default 0.096)")
+    g.add_argument("--phase", type=_ranged(-2 * math.pi, 2 * math.pi), default=0.0,
+                   help="force phase phi in F0 sin(Omega t + phi), in [-2pi, 2pi] (default 0)")
+    g.add_argument("--nu", type=_ranged(0, 100), default=0.0,
+                   help="Coulomb friction coefficient under the CID's mass, in [0, 100] (default 0: frictionless)")
+    g.add_argument("--frequency-hz", type=_ranged(0, 1e6, lo_open=True), default=1.5,
+                   help="structure frequency in Hz; sets the friction scale only (default 1.5)")
+    g.add_argument("--unit-m", type=_ranged(0, 1e6, lo_open=True), default=0.01,
+                   help="length of one model unit in metres; sets the friction scale only (default 0.01)")
+    p = ap.add_argument_group("protocol (model.md, 'Response protocol')")
+    p.add_argument("--start", choices=STARTS, default="centre",
+                   help="damper mass's initial place, structure at rest (default centre)")
+    p.add_argument("--periods", type=_ranged(0, 1e7, lo_open=True), default=500.0,
+                   help="natural periods simulated, > 0 (default 500)")
+    p.add_argument("--average-from", type=_ranged(0, 1e7), default=250.0,
+                   help="the amplitude window starts after this many periods, < --periods (default 250)")
+
+
+def _system(args) -> System:
+    rp = args.rp if args.rp is not None else (1.0 if args.damper == "pid" else 0.0)
+    if args.damper == "cid" and args.rp is not None:
+        raise ParameterError("--rp is only for --damper pid")
+    return System.from_gap_ratio(args.damper, mu=args.mu, beta=args.beta, e=args.e, gap_ratio=args.gap_ratio,
+                                 rp=rp, force_ratio=args.force_ratio, phase=args.phase, nu=args.nu,
+                                 frequency_hz=args.frequency_hz, unit_m=args.unit_m)
+
+
+def _protocol(args) -> Protocol:
+    return Protocol(periods=args.periods, average_from=args.average_from, start=args.start)
+
+
+def _finite(obj):
+    """JSON without NaN/inf tokens: they become null."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_finite(v) for v in obj]
+    return obj
+
+
+def cmd_run(args) -> dict:
+    from .simulate import simulate
+
+    system = _system(args)
+    res = simulate(system, args.r, _protocol(args))
+    out = {"damper": system.kind, "parameters": system.as_dict(), "gap": system.gap, "a_max": system.a_max}
+    out.update(res.as_json())
+    return out
+
+
+def cmd_sweep(args) -> dict:
+    from .simulate import frequency_grid, sweep
+
+    if args.r_max < args.r_min:
+        raise ParameterError(f"--r-max = {args.r_max} is below --r-min = {args.r_min}")
+    system = _system(args)
+    protocol = _protocol(args)
+    grid = frequency_grid(args.r_min, args.r_max, args.r_step)
+    result = sweep(system, grid, protocol)
+    out = {
+        "damper": system.kind,
+        "parameters": system.as_dict(),
+        "gap": system.gap,
+        "a_max": system.a_max,
+        "x_max": result.x_max,
+        "X_m": result.x_max / system.a_max,
+        "r_at_max": result.r_at_max,
+        "r": grid.tolist(),
+        "amplitude": result.column("amplitude").tolist(),
+        "amplitude_ratio": result.column("amplitude_ratio").tolist(),
+        "aipc": result.column("aipc").tolist(),
+        "ipc_class": [run.as_json()["ipc_class"] for run in result.runs],
+        "diagnostics": {
+            "impacts": int(result.column("impacts").sum()),
+            "sticking_episodes": int(result.column("sticking_episodes").sum()),
+            "grazing_events": int(result.column("grazing_events").sum()),
+            "max_penetration": float(result.column("max_penetration").max()),
+            "energy_residual": float(abs(result.column("energy_residual")).max()),
+            "event_cap_reached": bool(result.column("event_cap_reached").any()),
+        },
+    }
+    if args.out:
+        from .dataset import curve_dataset, write_netcdf
+
+        ds = curve_dataset(system, [args.gap_ratio], [protocol.start], [[result]], protocol,
+                           curve={"command": "impact " + " ".join(sys.argv[1:])})
+        write_netcdf(ds, args.out)
+        out["out"] = args.out
+    return out
+
+
+def cmd_masri(args) -> dict:
+    from .masri import masri_2eipc
+    from .params import a_max
+
+    gap = args.gap_ratio * a_max(args.beta, args.force_ratio)
+    sol = masri_2eipc(args.mu, args.e, args.beta, args.r, gap, force_ratio=args.force_ratio)
+    keys = ("exists", "admissible", "stable", "tau", "amplitude_ratio", "u", "eigenvalue_moduli")
+    out = {"mu": args.mu, "e": args.e, "beta": args.beta, "r": args.r, "gap_ratio": args.gap_ratio,
+           "gap": gap, "force_ratio": args.force_ratio}
+    for root in ("upper", "lower"):
+        out[root] = {k: sol[root][k] for k in keys}
+    return out
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="impact", description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    sub = ap.add_subparsers(dest="command", required=True)
+
+    run = sub.add_parser("run", help="simulate one case under the response protocol")
+    _model_flags(run)
+    run.add_argument("--r", type=_ranged(0, 100, lo_open=True), default=1.0,
+                     help="frequency ratio Omega/omega, in (0, 100] (default 1.0)")
+    run.set_defaults(func=cmd_run)
+
+    sw = sub.add_parser("sweep", help="one frequency sweep: x_max and X_m = x_max / A_max")
+    _model_flags(sw)
+    sw.add_argument("--r-min", type=_ranged(0, 100, lo_open=True), default=0.9, help="lowest r (default 0.9)")
+    sw.add_argument("--r-max", type=_ranged(0, 100, lo_open=True), default=1.1, help="highest r (default 1.1)")
+    sw.add_argument("--r-step", type=_ranged(0, 10, lo_open=True), default=0.005, help="step of r (default 0.005)")
+    sw.add_argument("--out", default=None, help="write the sweep as a netCDF dataset to this path")
+    sw.set_defaults(func=cmd_sweep)
+
+    ms = sub.add_parser("masri", help="Masri's closed-form 2-EIPC steady state and its stability (masri.md)")
+    ms.add_argument("--mu", type=_ranged(0, 10, lo_open=True), default=DEFAULTS["mu"], help="mass ratio, in (0, 10]")
+    ms.add_argument("--e", type=_ranged(0, 1, lo_open=True), default=DEFAULTS["e"], help="restitution, in (0, 1]")
+    ms.add_argument("--beta", type=_ranged(0, 1, lo_open=True, hi_open=True), default=DEFAULTS["beta"],
+                    help="structural damping ratio, in (0, 1)")
+    ms.add_argument("--r", type=_ranged(0, 100, lo_open=True), default=1.0, help="frequency ratio, in (0, 100]")
+    ms.add_argument("--gap-ratio", type=_ranged(0, 1e6), default=DEFAULTS["gap_ratio"], help="g = d / A_max")
+    ms.add_argument("--force-ratio", type=_ranged(0, 1e12, lo_open=True), default=DEFAULTS["force_ratio"],
+                    help="F0/K")
+    ms.set_defaults(func=cmd_masri)
+    return ap
+
+
+def main(argv=None) -> int:
+    ap = build_parser()
+    args = ap.parse_args(argv)
+    if getattr(args, "average_from", 0.0) >= getattr(args, "periods", math.inf):
+        ap.error(f"argument --average-from: {args.average_from} must be below --periods = {args.periods}")
+    try:
+        out = args.func(args)
+    except ParameterError as exc:
+        ap.error(str(exc))
+    json.dump(_finite(out), sys.stdout, indent=1)
+    sys.stdout.write("\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,172 @@
+"""Model parameters and the response protocol, in model units.
+
+Model units (model.md, "Symbols and scaling"): the structure's mass M = 1, its
+natural frequency omega = 1 (time unit 1/omega, natural period 2*pi) and lengths
+in the paper's "units".  The force amplitude enters as the static deflection
+``force_ratio`` = F0/K, so the bare structure's resonant amplitude is
+A_max = (F0/K) / (2 beta).
+
+Every constructor validates its input and raises :class:`ParameterError`
+naming the field and its allowed range, so the command line, the pipeline and
+the library refuse bad input with the same words.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+DAMPER_KINDS = ("cid", "pid")
+STARTS = ("centre", "left", "right")
+G_GRAV = 9.80665  # m/s^2, standard gravity; only friction needs a physical scale
+
+
+class ParameterError(ValueError):
+    """A parameter outside its allowed range; the message names the field."""
+
+
+def _check(name: str, value: float, lo: float, hi: float, *, lo_open=False, hi_open=False) -> float:
+    value = float(value)
+    below = value <= lo if lo_open else value < lo
+    above = value >= hi if hi_open else value > hi
+    if not math.isfinite(value) or below or above:
+        lb = "(" if lo_open else "["
+        rb = ")" if hi_open else "]"
+        raise ParameterError(f"{name} = {value!r} is out of range: allowed {lb}{lo}, {hi}{rb}")
+    return value
+
+
+def a_max(beta: float, force_ratio: float) -> float:
+    """Resonant amplitude of the bare structure, (F0/K)/(2 beta); inf for beta = 0."""
+    return math.inf if beta == 0.0 else force_ratio / (2.0 * beta)
+
+
+def friction_acceleration(nu: float, frequency_hz: float, unit_m: float) -> float:
+    """Coulomb friction acceleration nu*g in model units (time 1/omega, length one unit).
+
+    model.md: a_f = nu * g_grav / (omega^2 * L_unit) with omega = 2*pi*frequency_hz.
+    """
+    omega = 2.0 * math.pi * frequency_hz
+    return nu * G_GRAV / (omega * omega * unit_m)
+
+
+@dataclass(frozen=True)
+class System:
+    """One impact-damper system (structure + damper), model units.
+
+    kind          'cid' (free mass, Masri's classical damper) or 'pid' (linearised pendulum)
+    mu            mass ratio m/M
+    beta          structural damping ratio
+    e             coefficient of restitution
+    gap           total clearance d (model units); the walls sit at y - x = +-d/2
+    rp            pendulum tuning ratio r' = omega_p/omega (PID only; 0 for the CID)
+    force_ratio   F0/K, the static deflection under the force amplitude
+    phase         force phase phi: F = F0 sin(Omega t + phi)
+    nu            Coulomb friction coefficient under the free mass (CID only)
+    frequency_hz  structure frequency, sets the friction scale only
+    unit_m        length of one model unit in metres, sets the friction scale only
+    """
+
+    kind: str
+    mu: float
+    beta: float
+    e: float
+    gap: float
+    rp: float = 0.0
+    force_ratio: float = 0.096
+    phase: float = 0.0
+    nu: float = 0.0
+    frequency_hz: float = 1.5
+    unit_m: float = 0.01
+
+    def __post_init__(self):
+        if self.kind not in DAMPER_KINDS:
+            raise ParameterError(f"kind = {self.kind!r} is not allowed: choose one of {', '.join(DAMPER_KINDS)}")
+        _check("mu", self.mu, 0.0, 10.0, lo_open=True)
+        _check("beta", self.beta, 0.0, 1.0, hi_open=True)
+        _check("e", self.e, 0.0, 1.0)
+        _check("gap", self.gap, 0.0, 1e12)
+        _check("rp", self.rp, 0.0, 1e4)
+        _check("force_ratio", self.force_ratio, 0.0, 1e12, lo_open=True)
+        _check("phase", self.phase, -2 * math.pi, 2 * math.pi)
+        _check("nu", self.nu, 0.0, 100.0)
+        _check("frequency_hz", self.frequency_hz, 0.0, 1e6, lo_open=True)
+        _check("unit_m", self.unit_m, 0.0, 1e6, lo_open=True)
+        if self.kind == "pid" and self.rp == 0.0:
+            raise ParameterError("rp = 0.0 is out of range for kind 'pid': allowed (0, 10000]; a PID with r' = 0 is the CID")
+        if self.kind == "cid" and self.rp != 0.0:
+            raise ParameterError(f"rp = {self.rp!r} is not allowed for kind 'cid': the CID has no pendulum")
+        if self.kind == "pid" and self.nu != 0.0:
+            raise ParameterError("nu is only defined for kind 'cid' (the pendulum mass does not slide on a floor)")
+
+    @classmethod
+    def from_gap_ratio(cls, kind: str, mu: float, beta: float, e: float, gap_ratio: float, **kw) -> "System":
+        """Build a system with d = g * A_max (the paper's gap ratio g = d / A_max)."""
+        _check("gap_ratio", gap_ratio, 0.0, 1e6)
+        _check("beta", beta, 0.0, 1.0, lo_open=True, hi_open=True)
+        return cls(kind=kind, mu=mu, beta=beta, e=e, gap=gap_ratio * a_max(beta, kw.get("force_ratio", 0.096)), **kw)
+
+    @property
+    def a_max(self) -> float:
+        return a_max(self.beta, self.force_ratio)
+
+    @property
+    def gap_ratio(self) -> float:
+        return self.gap / self.a_max
+
+    @property
+    def friction_accel(self) -> float:
+        return friction_acceleration(self.nu, self.frequency_hz, self.unit_m)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class Protocol:
+    """The paper's response protocol (model.md, "Response protocol").
+
+    periods         natural periods simulated (2*pi each)
+    average_from    the amplitude window starts after this many periods
+    start           damper mass's initial place: 'centre', 'left' or 'right' wall
+    max_events_per_period   guard against impact accumulations: exceeding it
+                    ends the run with a flag instead of looping
+    """
+
+    periods: float = 500.0
+    average_from: float = 250.0
+    start: str = "centre"
+    max_events_per_period: int = 20000
+    extra: dict = field(default_factory=dict, compare=False, repr=False)
+
+    def __post_init__(self):
+        _check("periods", self.periods, 0.0, 1e7, lo_open=True)
+        _check("average_from", self.average_from, 0.0, self.periods, hi_open=True)
+        if self.start not in STARTS:
+            raise ParameterError(f"start = {self.start!r} is not allowed: choose one of {', '.join(STARTS)}")
+        if int(self.max_events_per_period) < 10:
+            raise ParameterError("max_events_per_period must be >= 10")
+
+    @property
+    def t_end(self) -> float:
+        return 2.0 * math.pi * self.periods
+
+    @property
+    def t_window(self) -> float:
+        return 2.0 * math.pi * self.average_from
+
+
+IPC_CLASSES = ("<1 IPC", "1 IPC", "2 IPC", ">2 IPC")
+
+
+def ipc_class(aipc: float) -> int:
+    """The paper's impacts-per-cycle class: 0 '<1', 1 '1 IPC', 2 '2 IPC', 3 '>2' (-1 if undefined)."""
+    if not math.isfinite(aipc):
+        return -1
+    if aipc < 0.5:
+        return 0
+    if aipc < 1.5:
+        return 1
+    if aipc <= 2.5:
+        return 2
+    return 3

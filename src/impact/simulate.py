@@ -1,0 +1,214 @@
+"""Runs and frequency sweeps of the CID and PID with the exact event-driven core.
+
+`simulate` follows the paper's response protocol (model.md): start from rest
+(damper mass centred or at a wall), simulate `periods` natural periods, and
+measure the amplitude as sqrt(2) * RMS of x over the window from
+`average_from` periods on, integrated exactly from the piecewise closed form.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import _kernels as K
+from .params import IPC_CLASSES, Protocol, System, ipc_class
+
+#: relative velocity below which a rebound is treated as sticking, in units of
+#: F0/K * omega (the velocity scale of the forcing); far below any resolved rebound
+STICK_VELOCITY = 1e-8
+
+
+def pid_data(system: System, r: float):
+    """Eigen-data of the PID's free flight and the harmonic particular solution.
+
+    State (x, x', y, y'): x'' = -2 beta x' - x + mu wp^2 (y - x) + f sin, y'' = -wp^2 (y - x).
+    Returns None for the CID, so the kernel compiles without the pendulum path.
+    """
+    if system.kind != "pid":
+        return None
+    mu, b, wp2 = system.mu, system.beta, system.rp ** 2
+    a = np.array([
+        [0.0, 1.0, 0.0, 0.0],
+        [-(1.0 + mu * wp2), -2.0 * b, mu * wp2, 0.0],
+        [0.0, 0.0, 0.0, 1.0],
+        [wp2, 0.0, -wp2, 0.0],
+    ])
+    lam, vec = np.linalg.eig(a)
+    vec = vec.astype(np.complex128)
+    vinv = np.linalg.inv(vec)
+    forcing = np.array([0.0, system.force_ratio, 0.0, 0.0], dtype=np.complex128)
+    zc = np.linalg.solve(1j * r * np.eye(4) - a, forcing)
+    return (lam.astype(np.complex128), vec, vinv, zc)
+
+
+def initial_state(system: System, start: str):
+    """Rest, with the damper mass centred or resting against a wall.
+
+    Returns (state, mode, side); a mass placed at a wall starts in contact and
+    the kernel decides at once whether the wall holds it.
+    """
+    half = 0.5 * system.gap
+    if start == "centre" or system.gap == 0.0:
+        return np.zeros(4), K.MODE_FREE, 0
+    side = 1 if start == "right" else -1
+    return np.array([0.0, 0.0, side * half, 0.0]), K.MODE_STUCK, side
+
+
+def _check_resonance(system: System, r: float):
+    if system.beta == 0.0 and abs(r - 1.0) < 1e-12:
+        raise ValueError("r = 1 with beta = 0 is the undamped resonance: the forced response is unbounded")
+
+
+def param_vector(system: System, r: float, protocol: Protocol, t0: float = 0.0) -> np.ndarray:
+    p = np.zeros(K.NPAR)
+    p[K.P_MU] = system.mu
+    p[K.P_BETA] = system.beta
+    p[K.P_E] = system.e
+    p[K.P_D] = system.gap
+    p[K.P_WP] = system.rp
+    p[K.P_F] = system.force_ratio
+    p[K.P_R] = r
+    p[K.P_PHI] = system.phase
+    p[K.P_VSTICK] = STICK_VELOCITY * system.force_ratio
+    p[K.P_TEND] = protocol.t_end
+    p[K.P_TWIN] = protocol.t_window
+    p[K.P_MAXEV] = protocol.max_events_per_period
+    p[K.P_T0] = t0
+    return p
+
+
+@dataclass
+class RunResult:
+    """One run under the response protocol (model units)."""
+
+    r: float
+    amplitude: float
+    amplitude_ratio: float
+    aipc: float
+    ipc_class: int
+    diagnostics: dict
+    final_state: np.ndarray
+    final_contact: int
+    records: dict | None = field(default=None, repr=False)
+
+    def as_json(self) -> dict:
+        out = {
+            "r": self.r,
+            "amplitude": self.amplitude,
+            "amplitude_ratio": self.amplitude_ratio,
+            "aipc": self.aipc,
+            "ipc_class": IPC_CLASSES[self.ipc_class] if self.ipc_class >= 0 else "undefined",
+            "diagnostics": self.diagnostics,
+        }
+        return out
+
+
+def _diagnostics(diag: np.ndarray) -> dict:
+    work = diag[K.D_WORK]
+    residual = work - diag[K.D_VISC] - diag[K.D_IMPLOSS] - (diag[K.D_E1] - diag[K.D_E0])
+    scale = max(abs(work), diag[K.D_VISC] + diag[K.D_IMPLOSS], 1e-300)
+    return {
+        "impacts": int(diag[K.D_IMPACTS]),
+        "impacts_in_window": int(diag[K.D_IMPACTS_WIN]),
+        "sticking_episodes": int(diag[K.D_STICKS]),
+        "grazing_events": int(diag[K.D_GRAZE]),
+        "max_penetration": float(max(diag[K.D_PEN], 0.0)),
+        "energy_residual": float(residual / scale),
+        "work_input": float(work),
+        "viscous_dissipation": float(diag[K.D_VISC]),
+        "impact_losses": float(diag[K.D_IMPLOSS]),
+        "time_in_contact": float(diag[K.D_STUCKTIME]),
+        "search_steps": int(diag[K.D_STEPS]),
+        "event_cap_reached": bool(diag[K.D_CAP]),
+    }
+
+
+def simulate(system: System, r: float, protocol: Protocol = Protocol(), *, record: int = 0,
+             state=None, contact=None, t0: float = 0.0) -> RunResult:
+    """One run at frequency ratio r.
+
+    record: keep up to this many impact records (t, side, x, v-, y'-, v+, y'+, stuck).
+    state/contact: start from a given (x, x', y, y') and contact code instead of
+    the protocol's rest state (continuation sweeps, closed-form orbits).
+    """
+    _check_resonance(system, r)
+    if system.nu > 0.0:
+        raise NotImplementedError("Coulomb friction (nu > 0) is not in the event-driven core yet")
+    if state is None:
+        z0, mode, side = initial_state(system, protocol.start)
+    else:
+        z0 = np.asarray(state, dtype=float)
+        code = 0 if contact is None else int(contact)
+        side = int(round(code / 10)) if code else 0
+        mode = code - 10 * side
+    p = param_vector(system, r, protocol, t0)
+    rec = np.zeros((int(record), K.NREC))
+    diag = np.zeros(K.NDIAG)
+    z_out = np.zeros(4)
+    final = K.run(p, z0, mode, side, pid_data(system, r), rec, diag, z_out)
+    return _result(system, r, protocol, diag, z_out, final, rec)
+
+
+def _result(system, r, protocol, diag, z_out, final, rec) -> RunResult:
+    t_win = protocol.t_window
+    t_end = diag[K.D_TEND]
+    span = t_end - t_win
+    complete = not diag[K.D_CAP] and span > 0
+    amp = math.sqrt(2.0 * diag[K.D_X2WIN] / span) if complete else math.nan
+    cycles = span * r / (2.0 * math.pi)
+    aipc = diag[K.D_IMPACTS_WIN] / cycles if complete else math.nan
+    records = None
+    if rec.shape[0]:
+        n = int(diag[K.D_NREC])
+        cols = ("t", "side", "x", "v_minus", "w_minus", "v_plus", "w_plus", "stuck")
+        records = {c: rec[:n, i].copy() for i, c in enumerate(cols)}
+    amax = system.a_max
+    return RunResult(
+        r=float(r),
+        amplitude=amp,
+        amplitude_ratio=amp / amax if math.isfinite(amax) else math.nan,
+        aipc=aipc,
+        ipc_class=ipc_class(aipc),
+        diagnostics=_diagnostics(diag),
+        final_state=z_out.copy(),
+        final_contact=int(final),
+        records=records,
+    )
+
+
+def frequency_grid(r_min: float, r_max: float, r_step: float) -> np.ndarray:
+    """Inclusive grid r_min, r_min + step, ..., r_max, free of accumulated round-off."""
+    n = int(math.floor((r_max - r_min) / r_step + 1e-9)) + 1
+    return np.round(r_min + r_step * np.arange(n), 12)
+
+
+@dataclass
+class SweepResult:
+    """A frequency sweep under the protocol: per-r results and the paper's x_max, X_m."""
+
+    r: np.ndarray
+    runs: list
+
+    def column(self, name: str) -> np.ndarray:
+        if name in ("amplitude", "amplitude_ratio", "aipc", "ipc_class"):
+            return np.array([getattr(run, name) for run in self.runs])
+        return np.array([run.diagnostics[name] for run in self.runs])
+
+    @property
+    def x_max(self) -> float:
+        amp = self.column("amplitude")
+        return float(np.max(amp)) if np.all(np.isfinite(amp)) else math.nan
+
+    @property
+    def r_at_max(self) -> float:
+        amp = self.column("amplitude")
+        return float(self.r[int(np.nanargmax(amp))]) if np.any(np.isfinite(amp)) else math.nan
+
+
+def sweep(system: System, r_values, protocol: Protocol = Protocol()) -> SweepResult:
+    """Frequency sweep, every point started afresh from the protocol's rest state."""
+    r_values = np.asarray(r_values, dtype=float)
+    return SweepResult(r=r_values, runs=[simulate(system, float(r), protocol) for r in r_values])
