@@ -17,6 +17,7 @@ import numpy as np
 import xarray as xr
 
 from .params import Protocol, System
+from .pipeline import publish as _publish
 from .provenance import attributes
 
 IPC_FLAG_VALUES = np.array([-1, 0, 1, 2, 3], dtype=np.int8)
@@ -132,7 +133,7 @@ def write_netcdf(ds: xr.Dataset, path) -> Path:
     os.close(fd)
     try:
         ds.to_netcdf(tmp, encoding=encoding, engine="netcdf4")
-        os.replace(tmp, path)
+        _publish(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise

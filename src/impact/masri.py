@@ -18,11 +18,12 @@ Conventions kept from masri.md:
   atan2 (D3).
 
 The regular forms (5)-(8) are used throughout.  They are evaluated in the
-homogeneous form of section 3.4 (everything multiplied by Lambda^2 > 0), so
-nothing is divided by Lambda and the Lambda -> 0 limit is finite.  Note that
-H = Hnum/Lambda changes sign through infinity at Lambda = 0, so the eq.-(6)
-labels of the two roots swap there (the roots themselves stay continuous);
-the labels here are exactly those of eq. (6), with sign(0) := +1.
+homogeneous form of section 3.4 (everything multiplied by Lambda^2), so
+nothing is divided by Lambda and the Lambda -> 0 limit is finite.  For
+0 <= e <= 1 and beta > 0, Lambda > 0 strictly (proof in ``_constants``);
+Lambda = 0 needs beta = 0 and e = 1 (or beta = 0 at r = 1/(2k+1), where
+H's numerator vanishes too), so H is finite for every damped structure.
+The labels are those of eq. (6) taken from the Lambda -> 0+ side.
 
 ``exact_impact_map`` is an independent implementation of the map G of section
 6.1 (closed-form flow, root-found impact, impact law, mirror) for checking the
@@ -41,8 +42,8 @@ from impact.params import ParameterError
 N_GRID = 4000  # samples per half period for the extremum searches (masri.md 4.3)
 BRANCHES = ("upper", "lower")
 _SIGNS = {"upper": +1.0, "lower": -1.0}
-_ROOT_KEYS = ("tau", "force_phase", "amplitude", "amplitude_ratio", "u", "x0",
-              "v_minus", "v_plus", "B1", "B2", "no_extra_impact_margin")
+_ROOT_KEYS = ("tau", "force_phase", "sin_tau", "cos_tau", "amplitude", "amplitude_ratio", "u",
+              "x0", "v_minus", "v_plus", "B1", "B2", "no_extra_impact_margin")
 
 
 class ImpactMapError(RuntimeError):
@@ -62,6 +63,9 @@ def _validate(mu, e, beta, r, gap, force_ratio):
             raise ParameterError(f"{name} = {value!r} is out of range for the 2-EIPC closed form")
     if beta == 0 and r == 1:
         raise ParameterError("beta = 0 with r = 1 is the singular undamped resonance (A = inf)")
+    n = round(1.0 / r)
+    if beta == 0 and n % 2 == 1 and abs(n * r - 1.0) < 1e-12:
+        raise ParameterError(f"beta = 0 with r = 1/{n} is degenerate: Lambda = H's numerator = 0")
 
 
 def _constants(mu, e, beta, r, gap, force_ratio) -> dict:
@@ -77,7 +81,10 @@ def _constants(mu, e, beta, r, gap, force_ratio) -> dict:
     k1 = (1.0 - e + 2.0 * mu) / (1.0 + e)
     k2 = (1.0 - e - 2.0 * mu * e) / (1.0 + e)
     G2 = h1 * h1 + (1.0 + h2) ** 2
-    lam = k2 * eta * G2 + 2.0 * mu * (beta * h1 + eta * (1.0 + h2))
+    # Lambda >= Lambda(e=1) = mu e^{-beta T} [2 eta sinh(beta T) + 2 beta sin(eta T)]
+    # >= 2 mu beta e^{-beta T} (eta T + sin eta T) > 0, so a negative value is
+    # round-off (beta = 0, e = 1); clamping keeps the eq.-(6) labels continuous.
+    lam = max(k2 * eta * G2 + 2.0 * mu * (beta * h1 + eta * (1.0 + h2)), 0.0)
     hnum = math.pi * eta * G2 + 4.0 * mu * r * h1
     return dict(mu=mu, e=e, beta=beta, r=r, gap=gap, force_ratio=force_ratio,
                 eta=eta, T=T, A=A, phi=math.atan2(2.0 * beta * r, 1.0 - r * r),
@@ -108,16 +115,16 @@ def _existence(c) -> dict:
 def _root_phase(c, ex, sign) -> tuple[float, float]:
     """(sin tau, cos tau / Lambda) of the eq.-(6) root with the given sign.
 
-    Eq. (6) times Lambda^2: sin tau = (-2 rho Lambda^2 + s Hnum S)/W and
-    cos tau / Lambda = (-rho Hnum - 2 s S)/W with s = sign * sgn(Lambda),
-    S = sqrt(S2), W = Hnum^2 + 4 Lambda^2.  Regular at Lambda = 0, and the
-    B's of eq. (7) need exactly cos tau / Lambda.
+    Eq. (6) times Lambda^2 (Lambda >= 0, see _constants):
+    sin tau = (-2 rho Lambda^2 + sign Hnum S)/W and
+    cos tau / Lambda = (-rho Hnum - 2 sign S)/W, with S = sqrt(S2) and
+    W = Hnum^2 + 4 Lambda^2.  Regular at Lambda = 0, and the B's of eq. (7)
+    need exactly cos tau / Lambda.
     """
     lam, hnum, rho = c["Lambda"], c["Hnum"], c["rho"]
-    s = sign * (1.0 if lam >= 0.0 else -1.0)
     S = math.sqrt(max(ex["S2"], 0.0))
     W = ex["W"]
-    return (-2.0 * rho * lam * lam + s * hnum * S) / W, (-rho * hnum - 2.0 * s * S) / W
+    return (-2.0 * rho * lam * lam + sign * hnum * S) / W, (-rho * hnum - 2.0 * sign * S) / W
 
 
 def _root_from_phase(c, sin_tau, cos_over_lambda) -> dict:
@@ -232,7 +239,7 @@ def _impact_matrix(mu, e) -> np.ndarray:
                      [1.0 + e, mu - e]]) / (1.0 + mu)
 
 
-def jacobian(c, root) -> np.ndarray:
+def _jacobian(c, root) -> np.ndarray:
     """J = DG(w*) of section 6.2, w = (t, x, xdot, ydot) just after a +d/2 impact.
 
     (a) the next impact time moves by g . dw, (b) the pre-impact main-mass
@@ -254,7 +261,7 @@ def jacobian(c, root) -> np.ndarray:
 
 def _stability(c, root, admissible) -> dict:
     """Eigenvalues of J; stable iff admissible and all |lambda| < 1 (section 6.1)."""
-    J = jacobian(c, root)
+    J = _jacobian(c, root)
     lam = np.linalg.eigvals(J)
     lam = lam[np.argsort(-np.abs(lam))]
     moduli = np.abs(lam)
@@ -278,9 +285,9 @@ def _missing_root(reason: str) -> dict:
     return out
 
 
-def _analyse_root(c, sign) -> dict:
+def _analyse_root(c, ex, sign) -> dict:
     """One branch of eq. (6): orbit, admissibility, amplitude and stability."""
-    root = _root_from_phase(c, *_root_phase(c, c["_ex"], sign))
+    root = _root_from_phase(c, *_root_phase(c, ex, sign))
     root.update(_admissibility(c, root))
     root["amplitude"] = _amplitude(c, root)
     root["amplitude_ratio"] = root["amplitude"] / c["force_ratio"]
@@ -295,9 +302,11 @@ def masri_2eipc(mu, e, beta, r, gap, force_ratio=0.096) -> dict:
     Returns the inputs, H, rho, rho_max, d_max, A, phi (and Lambda), plus
     ``upper``/``lower`` dicts (upper/lower signs of eq. 6).  Each root dict has
     exists, admissible, approach_ok, departure_ok, no_extra_impact_margin,
-    reason, stable, tau, force_phase, amplitude, amplitude_ratio, u, x0,
-    v_minus, v_plus, B1, B2, eigenvalues, eigenvalue_moduli, max_modulus and
+    reason ('' if admissible), stable, tau, force_phase, sin_tau, cos_tau,
+    amplitude, amplitude_ratio, u, x0, v_minus, v_plus, B1, B2, eigenvalues
+    (sorted by decreasing modulus), eigenvalue_moduli, max_modulus and
     jacobian (4x4, coordinates (t, x, xdot, ydot) after a +d/2 impact).
+    Gaps, amplitudes and velocities are in model units (omega = 1).
     """
     mu, e, beta, r, gap, force_ratio = map(float, (mu, e, beta, r, gap, force_ratio))
     _validate(mu, e, beta, r, gap, force_ratio)
@@ -305,13 +314,14 @@ def masri_2eipc(mu, e, beta, r, gap, force_ratio=0.096) -> dict:
     ex = _existence(c)
     out = {k: c[k] for k in ("mu", "e", "beta", "r", "gap", "force_ratio", "rho", "A", "phi", "Lambda")}
     out.update(H=ex["H"], rho_max=ex["rho_max"], d_max=ex["d_max"])
-    if ex["S2"] < 0.0 or ex["W"] == 0.0:
+    if ex["W"] == 0.0 or ex["S2"] < 0.0:
+        reason = ("degenerate: Lambda = Hnum = 0 (beta = 0 at r = 1/(2k+1))" if ex["W"] == 0.0
+                  else "no real root: d > d_max")
         for name in BRANCHES:
-            out[name] = _missing_root("no real root: d > d_max")
+            out[name] = _missing_root(reason)
         return out
-    c["_ex"] = ex
     for name in BRANCHES:
-        out[name] = _analyse_root(c, _SIGNS[name])
+        out[name] = _analyse_root(c, ex, _SIGNS[name])
     return out
 
 

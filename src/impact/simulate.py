@@ -8,8 +8,11 @@ measure the amplitude as sqrt(2) * RMS of x over the window from
 
 from __future__ import annotations
 
+import fcntl
 import math
+import os
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -19,6 +22,34 @@ from .params import IPC_CLASSES, Protocol, System, ipc_class
 #: relative velocity below which a rebound is treated as sticking, in units of
 #: F0/K * omega (the velocity scale of the forcing); far below any resolved rebound
 STICK_VELOCITY = 1e-8
+
+
+_WARM: set = set()
+
+
+def _cache_dir() -> Path:
+    return Path(os.environ.get("NUMBA_CACHE_DIR") or Path(K.__file__).parent / "__pycache__")
+
+
+def ensure_compiled(kind: str) -> None:
+    """Compile (or load from numba's on-disk cache) the kernel for one damper kind.
+
+    Done under an exclusive file lock so that processes starting together
+    (parallel Snakemake jobs) never write the cache at the same time: the first
+    compiles and stores, the others wait and then load.
+    """
+    if kind in _WARM:
+        return
+    folder = _cache_dir()
+    folder.mkdir(parents=True, exist_ok=True)
+    with open(folder / "impact-jit.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            probe = System(kind, mu=0.01, beta=0.05, e=0.5, gap=1.0, rp=1.0 if kind == "pid" else 0.0)
+            _run_kernel(probe, 0.9, Protocol(periods=1.0, average_from=0.5), np.zeros(4), K.MODE_FREE, 0, 1)
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
+    _WARM.add(kind)
 
 
 def pid_data(system: System, r: float):
@@ -144,11 +175,16 @@ def simulate(system: System, r: float, protocol: Protocol = Protocol(), *, recor
         code = 0 if contact is None else int(contact)
         side = int(round(code / 10)) if code else 0
         mode = code - 10 * side
+    ensure_compiled(system.kind)
+    return _run_kernel(system, r, protocol, z0, mode, side, record, t0)
+
+
+def _run_kernel(system, r, protocol, z0, mode, side, record, t0=0.0) -> "RunResult":
     p = param_vector(system, r, protocol, t0)
     rec = np.zeros((int(record), K.NREC))
     diag = np.zeros(K.NDIAG)
     z_out = np.zeros(4)
-    final = K.run(p, z0, mode, side, pid_data(system, r), rec, diag, z_out)
+    final = K.run(p, np.asarray(z0, dtype=float), mode, side, pid_data(system, r), rec, diag, z_out)
     return _result(system, r, protocol, diag, z_out, final, rec)
 
 

@@ -1,0 +1,123 @@
+"""The parametric study as configuration: curves, grids and one curve's sweeps.
+
+A curve is a damper configuration (type, mu, e, r', nu) swept over the gap-ratio
+grid and the frequency grid for every configured start.  Curves are named by
+their parameters, so a curve drawn in several figures (the CID with mu = 0.01,
+e = 0.25 is in Figs. 8, 9 and 11) is one file, computed once.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .params import ParameterError, Protocol, System
+from .simulate import frequency_grid, sweep
+
+
+def _fmt(x: float) -> str:
+    return f"{x:g}"
+
+
+def curve_id(spec: dict) -> str:
+    """File-name id of a curve from its parameters, e.g. 'pid_mu0.01_e0.25_rp1'."""
+    name = f"{spec['damper']}_mu{_fmt(spec['mu'])}_e{_fmt(spec['e'])}"
+    if spec["damper"] == "pid":
+        name += f"_rp{_fmt(spec['rp'])}"
+    if spec.get("nu", 0.0):
+        name += f"_nu{_fmt(spec['nu'])}"
+    return name
+
+
+def figure_curves(cfg: dict, figure: str) -> dict:
+    """Curves of one figure, id -> spec, in drawing order."""
+    out = {}
+    for panel in cfg["figures"][figure]["panels"]:
+        for spec in panel["curves"]:
+            out.setdefault(curve_id(spec), spec)
+    return out
+
+
+def all_curves(cfg: dict) -> dict:
+    out = {}
+    for fig in cfg["figures"]:
+        out.update(figure_curves(cfg, fig))
+    return out
+
+
+def gap_grid(cfg: dict) -> np.ndarray:
+    g = cfg["protocol"]["gap"]
+    return frequency_grid(g["min"], g["max"], g["step"])
+
+
+def freq_grid(cfg: dict) -> np.ndarray:
+    f = cfg["protocol"]["freq"]
+    return frequency_grid(f["min"], f["max"], f["step"])
+
+
+def check_config(cfg: dict) -> None:
+    """Checks a JSON schema cannot express; the message names the key."""
+    proto = cfg["protocol"]
+    if proto["average_from"] >= proto["periods"]:
+        raise ParameterError(f"protocol.average_from = {proto['average_from']} must be below "
+                             f"protocol.periods = {proto['periods']}")
+    for grid in ("freq", "gap"):
+        if proto[grid]["max"] < proto[grid]["min"]:
+            raise ParameterError(f"protocol.{grid}.max = {proto[grid]['max']} is below protocol.{grid}.min")
+    for fig, fcfg in cfg["figures"].items():
+        for i, panel in enumerate(fcfg["panels"]):
+            for j, spec in enumerate(panel["curves"]):
+                where = f"figures.{fig}.panels[{i}].curves[{j}]"
+                try:
+                    curve_system(cfg, spec, 1.0)
+                except ParameterError as exc:
+                    raise ParameterError(f"{where}: {exc}") from None
+
+
+def curve_system(cfg: dict, spec: dict, gap_ratio: float) -> System:
+    structure = cfg["structure"]
+    friction = cfg.get("friction", {})
+    kw = dict(rp=spec.get("rp", 0.0), force_ratio=structure["force_ratio"], phase=cfg["protocol"].get("phase", 0.0))
+    if spec.get("nu", 0.0):
+        kw.update(nu=spec["nu"], frequency_hz=friction.get("frequency_hz", 1.5), unit_m=friction.get("unit_m", 0.01))
+    if spec["damper"] == "cid" and "rp" in spec:
+        raise ParameterError("rp is only for damper pid")
+    return System.from_gap_ratio(spec["damper"], mu=spec["mu"], beta=structure["beta"], e=spec["e"],
+                                 gap_ratio=gap_ratio, **kw)
+
+
+def curve_starts(cfg: dict, spec: dict) -> list:
+    return list(cfg["protocol"]["starts"][spec["damper"]])
+
+
+def run_curve(cfg: dict, spec: dict, gap_ratios=None):
+    """All sweeps of one curve, as a self-describing dataset."""
+    from .dataset import curve_dataset
+
+    gaps = gap_grid(cfg) if gap_ratios is None else np.asarray(gap_ratios, dtype=float)
+    r = freq_grid(cfg)
+    proto_cfg = cfg["protocol"]
+    starts = curve_starts(cfg, spec)
+    results = []
+    for start in starts:
+        protocol = Protocol(periods=proto_cfg["periods"], average_from=proto_cfg["average_from"], start=start)
+        results.append([sweep(curve_system(cfg, spec, g), r, protocol) for g in gaps])
+    base = curve_system(cfg, spec, float(gaps[0]))
+    return curve_dataset(base, gaps, starts, results, protocol, curve={"id": curve_id(spec), **spec}, config=cfg)
+
+
+def optimum(ds, start: str) -> tuple[float, float]:
+    """(g, X_m) at the lowest X_m of one start's curve (the paper's 'optimum gap ratio')."""
+    xm = ds["X_m"].sel(start=start).values
+    if not np.any(np.isfinite(xm)):
+        return math.nan, math.nan
+    i = int(np.nanargmin(xm))
+    return float(ds["gap_ratio"].values[i]), float(xm[i])
+
+
+def two_ipc_range(ds, start: str) -> tuple[float, float]:
+    """Smallest and largest g whose motion at x_max is 2 IPC (NaN if none)."""
+    flag = ds["two_ipc_at_max"].sel(start=start).values.astype(bool)
+    g = ds["gap_ratio"].values[flag]
+    return (float(g.min()), float(g.max())) if g.size else (math.nan, math.nan)

@@ -1,0 +1,35 @@
+"""Independent analytic references for the tests (numpy only, no kernel code)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def oscillator(t, x0, v0, w2, two_zeta_w, amp, r, phase=0.0):
+    """x(t) of x'' + two_zeta_w x' + w2 x = amp sin(r t + phase) from (x0, v0), underdamped.
+
+    Real closed form: steady part X sin(r t + phase - lag) plus the decaying
+    transient fixed by the initial state.
+    """
+    t = np.asarray(t, dtype=float)
+    zeta_w = 0.5 * two_zeta_w
+    wd = np.sqrt(w2 - zeta_w ** 2)
+    den = np.hypot(w2 - r * r, two_zeta_w * r)
+    xs = amp / den
+    lag = np.arctan2(two_zeta_w * r, w2 - r * r)
+    xp0 = xs * np.sin(phase - lag)
+    vp0 = xs * r * np.cos(phase - lag)
+    c1 = x0 - xp0
+    c2 = (v0 - vp0 + zeta_w * c1) / wd
+    return np.exp(-zeta_w * t) * (c1 * np.cos(wd * t) + c2 * np.sin(wd * t)) + xs * np.sin(r * t + phase - lag)
+
+
+def rms_amplitude(fun, t0, t1, pieces=20000, order=12):
+    """sqrt(2) * RMS of fun over [t0, t1] by composite Gauss-Legendre (converged to round-off)."""
+    nodes, weights = np.polynomial.legendre.leggauss(order)
+    edges = np.linspace(t0, t1, pieces + 1)
+    mid = 0.5 * (edges[1:] + edges[:-1])[:, None]
+    half = 0.5 * (edges[1:] - edges[:-1])[:, None]
+    t = mid + half * nodes[None, :]
+    integral = np.sum(half * weights[None, :] * fun(t) ** 2)
+    return np.sqrt(2.0 * integral / (t1 - t0))

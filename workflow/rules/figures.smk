@@ -1,0 +1,21 @@
+# Stage 2: figures from the datasets only; a style change reruns no simulation.
+
+
+rule figure:
+    input:
+        curves=lambda wc: [sweep_file(s) for s in figure_curves(config, wc.fig).values()],
+        tmd=lambda wc: ["results/tables/tmd_optimum.json"] if needs_tmd(wc.fig) else [],
+        library=LIB_PLOT,
+    output:
+        png="results/figures/{fig}.png",
+        pdf="results/figures/{fig}.pdf",
+    params:
+        figure=lambda wc: config["figures"][wc.fig],
+    log:
+        "results/logs/figure/{fig}.log",
+    benchmark:
+        "results/benchmarks/figure/{fig}.tsv"
+    wildcard_constraints:
+        fig="fig[0-9]{2}",
+    script:
+        "../scripts/plot_figure.py"

@@ -1,0 +1,19 @@
+# Stage 1: one job per curve = every (start, gap ratio, frequency) run of that
+# damper configuration, written as one CF netCDF dataset.
+
+
+rule sweep_curve:
+    input:
+        library=LIB_SWEEP,
+    output:
+        "results/sweeps/{curve}.nc",
+    params:
+        study=curve_params,
+    log:
+        "results/logs/sweep_curve/{curve}.log",
+    benchmark:
+        "results/benchmarks/sweep_curve/{curve}.tsv"
+    wildcard_constraints:
+        curve="(cid|pid)_[A-Za-z0-9_.]+",
+    script:
+        "../scripts/sweep_curve.py"
