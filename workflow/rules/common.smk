@@ -1,19 +1,28 @@
 # Shared helpers: the study's curves from the configuration, library sources
 # as rule inputs (Snakemake does not track what a script imports).
-from impact.study import all_curves, check_config, curve_id, figure_curves
+import os
+
 from impact import comparison
+from impact.study import all_curves, check_config, curve_id, figure_curves
 
 check_config(config)
 
 FIGURES = list(config["figures"])
 CURVES = all_curves(config)
 
-LIB = "src/impact/"
-LIB_CORE = [LIB + f for f in ("__init__.py", "params.py", "_kernels.py", "simulate.py", "provenance.py")]
-LIB_SWEEP = LIB_CORE + [LIB + f for f in ("dataset.py", "study.py", "pipeline.py")]
-LIB_TMD = [LIB + "tmd.py", LIB + "pipeline.py"]
-LIB_PLOT = [LIB + "plotting.py", LIB + "study.py", LIB + "pipeline.py"]
-LIB_TABLE = [LIB + "comparison.py", LIB + "study.py", LIB + "pipeline.py"]
+ENV = "../envs/impact.yaml"
+
+
+def library(*names):
+    """Library source files a rule's script imports, as its inputs."""
+    return [os.path.join("src", "impact", name) for name in names]
+
+
+LIB_CORE = library("__init__.py", "params.py", "_kernels.py", "simulate.py", "provenance.py", "pipeline.py")
+LIB_SWEEP = LIB_CORE + library("dataset.py", "study.py")
+LIB_TMD = library("tmd.py", "pipeline.py", "params.py")
+LIB_PLOT = library("plotting.py", "study.py", "pipeline.py")
+LIB_TABLE = library("comparison.py", "study.py", "pipeline.py")
 
 
 def sweep_file(spec):
@@ -31,3 +40,9 @@ def curve_params(wildcards):
     if spec.get("nu", 0.0):
         out["friction"] = config["friction"]
     return out
+
+
+def table_curves(wildcards):
+    """The curves the paper's reported values refer to, where the study has them."""
+    wanted = {curve_id(s) for s in comparison.needed_curves()}
+    return [sweep_file(spec) for cid, spec in CURVES.items() if cid in wanted]

@@ -11,6 +11,8 @@ rule figure:
         pdf="results/figures/{fig}.pdf",
     params:
         figure=lambda wc: config["figures"][wc.fig],
+    conda:
+        ENV
     log:
         "results/logs/figure/{fig}.log",
     benchmark:

@@ -9,6 +9,8 @@ rule sweep_curve:
         "results/sweeps/{curve}.nc",
     params:
         study=curve_params,
+    conda:
+        ENV
     log:
         "results/logs/sweep_curve/{curve}.log",
     benchmark:

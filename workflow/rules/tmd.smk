@@ -10,6 +10,8 @@ rule tmd_optimum:
         mu=config["tmd"]["mu"],
         beta=config["structure"]["beta"],
         force_ratio=config["structure"]["force_ratio"],
+    conda:
+        ENV
     log:
         "results/logs/tmd_optimum.log",
     benchmark:
