@@ -33,3 +33,21 @@ def rms_amplitude(fun, t0, t1, pieces=20000, order=12):
     t = mid + half * nodes[None, :]
     integral = np.sum(half * weights[None, :] * fun(t) ** 2)
     return np.sqrt(2.0 * integral / (t1 - t0))
+
+
+def oscillator_derivatives(t, x0, v0, w2, two_zeta_w, amp, r, phase=0.0):
+    """(x, x', x'') of `oscillator`, differentiated in closed form."""
+    t = np.asarray(t, dtype=float)
+    zw = 0.5 * two_zeta_w
+    wd = np.sqrt(w2 - zw ** 2)
+    xs = amp / np.hypot(w2 - r * r, two_zeta_w * r)
+    lag = np.arctan2(two_zeta_w * r, w2 - r * r)
+    c1 = x0 - xs * np.sin(phase - lag)
+    c2 = (v0 - xs * r * np.cos(phase - lag) + zw * c1) / wd
+    ex, co, si = np.exp(-zw * t), np.cos(wd * t), np.sin(wd * t)
+    arg = r * t + phase - lag
+    h = ex * (c1 * co + c2 * si)
+    hd = ex * ((c2 * wd - zw * c1) * co - (c1 * wd + zw * c2) * si)
+    # the homogeneous part obeys h'' = -two_zeta_w h' - w2 h
+    hdd = -two_zeta_w * hd - w2 * h
+    return (h + xs * np.sin(arg), hd + xs * r * np.cos(arg), hdd - xs * r * r * np.sin(arg))

@@ -132,7 +132,7 @@ def test_brief_double_touch_inside_one_naive_step_is_caught():
     t_ref = brentq(s, t[over[0] - 1], t[over[0]], xtol=1e-15, rtol=1e-15)
     naive = s(np.arange(0.0, 2 * np.pi, 2 * np.pi / 64))  # 64 steps per period
     assert np.all(naive < 0)  # a sign check at step ends misses it
-    res = simulate(system, r, Protocol(periods=1.0, average_from=0.5), record=10, state=z0, contact=0)
+    res = simulate(system, r, Protocol(periods=1.0, average_from=0.5), record=10, state=z0)
     assert res.records["t"][0] == pytest.approx(t_ref, rel=1e-12, abs=1e-12)
     assert res.records["side"][0] == 1
 

@@ -39,8 +39,9 @@ from numba import njit
 NT = 7  # coefficient slots, see module docstring
 
 MODE_FREE = 0
-MODE_STUCK = 1
-MODE_LOCKED = 2
+MODE_STUCK = 1    # resting against a wall (side = +-1)
+MODE_LOCKED = 2   # d = 0: damper and structure are one body
+MODE_FLOOR = 3    # friction only: stuck to the floor away from the walls
 
 # parameter vector layout (float64 array)
 P_MU, P_BETA, P_E, P_D, P_WP, P_F, P_R, P_PHI = 0, 1, 2, 3, 4, 5, 6, 7
@@ -51,7 +52,8 @@ NPAR = 13
 D_IMPACTS, D_IMPACTS_WIN, D_STICKS, D_GRAZE, D_PEN = 0, 1, 2, 3, 4
 D_WORK, D_VISC, D_IMPLOSS, D_E0, D_E1, D_X2WIN = 5, 6, 7, 8, 9, 10
 D_CAP, D_NREC, D_STEPS, D_STUCKTIME, D_TEND = 11, 12, 13, 14, 15
-NDIAG = 16
+D_FRICTION = 16
+NDIAG = 17
 
 # record columns: t, side, x, v-, w-, v+, w+, stuck_after
 NREC = 8
@@ -125,8 +127,8 @@ def _state(kap, cx, cy, py1, py2, tau, z):
 # ----------------------------------------------------------------------------
 
 @njit(cache=True)
-def _oscillator(kap, cx, x0, v0, w2, two_zeta_w, amp, r, theta0):
-    """x'' + two_zeta_w x' + w2 x = amp sin(theta0 + r tau), from (x0, v0)."""
+def _oscillator(kap, cx, x0, v0, w2, two_zeta_w, amp, r, theta0, const):
+    """x'' + two_zeta_w x' + w2 x = amp sin(theta0 + r tau) + const, from (x0, v0)."""
     sigma = -0.5 * two_zeta_w
     root = np.sqrt(complex(w2 - 0.25 * two_zeta_w * two_zeta_w, 0.0))
     lp = sigma + 1j * root
@@ -138,8 +140,8 @@ def _oscillator(kap, cx, x0, v0, w2, two_zeta_w, amp, r, theta0):
     kap[6] = 0.0
     cx[4] = ch
     cx[5] = ch.conjugate()
-    cx[6] = 0.0
-    xp0 = 2.0 * ch.real
+    cx[6] = const / w2
+    xp0 = 2.0 * ch.real + const / w2
     vp0 = 2.0 * (ch * 1j * r).real
     h0 = x0 - xp0
     h1 = v0 - vp0
@@ -155,16 +157,25 @@ def _oscillator(kap, cx, x0, v0, w2, two_zeta_w, amp, r, theta0):
 
 
 @njit(cache=True)
-def _build_free(kap, cx, cy, poly, z0, t0, p, pid):
-    """Free flight of the damper mass from state z0 at absolute time t0."""
+def _build_free(kap, cx, cy, poly, z0, t0, p, pid, fric, sigma):
+    """Free flight of the damper mass from state z0 at absolute time t0.
+
+    With friction (CID), the mass slides in direction sigma = sign(s') and a
+    constant force mu a_f sigma acts on the structure, -a_f sigma on the mass.
+    """
     theta0 = p[P_R] * t0 + p[P_PHI]
     if pid is None:
-        _oscillator(kap, cx, z0[0], z0[1], 1.0, 2.0 * p[P_BETA], p[P_F], p[P_R], theta0)
+        if fric is None:
+            _oscillator(kap, cx, z0[0], z0[1], 1.0, 2.0 * p[P_BETA], p[P_F], p[P_R], theta0, 0.0)
+            poly[1] = 0.0
+        else:
+            a_f = fric[0] * sigma
+            _oscillator(kap, cx, z0[0], z0[1], 1.0, 2.0 * p[P_BETA], p[P_F], p[P_R], theta0, p[P_MU] * a_f)
+            poly[1] = -0.5 * a_f
         for k in range(NT):
             cy[k] = 0.0
         cy[6] = z0[2]
         poly[0] = z0[3]
-        poly[1] = 0.0
     else:
         lam, vec, vinv, zc = pid
         ph = np.exp(1j * theta0)
@@ -201,7 +212,7 @@ def _build_combined(kap, cx, cy, poly, z0, t0, p, offset):
     mu = p[P_MU]
     theta0 = p[P_R] * t0 + p[P_PHI]
     _oscillator(kap, cx, z0[0], z0[1], 1.0 / (1.0 + mu), 2.0 * p[P_BETA] / (1.0 + mu),
-                p[P_F] / (1.0 + mu), p[P_R], theta0)
+                p[P_F] / (1.0 + mu), p[P_R], theta0, 0.0)
     for k in range(NT):
         cy[k] = cx[k]
     cy[6] = cx[6] + offset
@@ -397,17 +408,18 @@ def _energy(z, p):
 # ----------------------------------------------------------------------------
 
 @njit(cache=True)
-def _stays_stuck(kap, cx, p, side):
+def _stays_stuck(kap, cx, p, side, a_f):
     """Whether the wall on `side` keeps holding the damper mass.
 
     The contact force on the damper is N = mu (x'' + wp^2 side d/2) and the
-    wall on `side` can only push inwards: side*N <= 0.  Decided on the first
-    derivative of q = side*x'' + wp^2 d/2 at 0 that is clearly non-zero.
+    wall on `side` can only push inwards; friction (CID) can add up to mu a_f
+    either way: the mass stays while q = side*x'' + wp^2 d/2 - a_f <= 0.
+    Decided on the first derivative of q at 0 that is clearly non-zero.
     """
-    base = p[P_WP] ** 2 * 0.5 * p[P_D]
+    base = p[P_WP] ** 2 * 0.5 * p[P_D] - a_f
     for n in range(2, 6):
         qn = side * _deriv_at0(kap, cx, n) + (base if n == 2 else 0.0)
-        scale = _bound(kap, cx, n) + (base if n == 2 else 0.0)
+        scale = _bound(kap, cx, n) + (abs(base) if n == 2 else 0.0)
         if abs(qn) > 1e-10 * scale:
             return qn < 0.0
     return True
@@ -447,18 +459,48 @@ def _stick(z, p, diag):
     z[3] = vc
 
 
+@njit(cache=True)
+def _floor_decision(kap, cx, a_f):
+    """With friction, s' = 0 away from the walls: stick to the floor (0) or slide (sigma).
+
+    Sticking needs |x''| <= a_f for the combined body (the friction force that
+    drags the mass along is m x'').  If the structure accelerates harder to
+    the right the mass lags behind: it slides with s' < 0 (sigma = -1).
+    """
+    x2 = _deriv_at0(kap, cx, 2)
+    tol = 1e-10 * (_bound(kap, cx, 2) + a_f)
+    if x2 > a_f + tol:
+        return -1
+    if x2 < -a_f - tol:
+        return 1
+    if abs(x2) < a_f - tol:
+        return 0
+    sgn = 1 if x2 > 0.0 else -1
+    for n in range(3, 6):
+        qn = _deriv_at0(kap, cx, n)
+        if abs(qn) > 1e-10 * _bound(kap, cx, n):
+            return -sgn if sgn * qn > 0.0 else 0
+    return 0
+
+
+@njit(cache=True)
+def encode_contact(mode, side, sigma):
+    return mode + 10 * (side + 1) + 100 * (sigma + 1)
+
+
 # ----------------------------------------------------------------------------
 # the run
 # ----------------------------------------------------------------------------
 
 @njit(cache=True)
-def run(p, z_init, mode_init, side_init, pid, rec, diag, z_out):
+def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
     """One run from absolute time p[P_T0] to p[P_TEND].
 
-    z_init: (x, x', y, y'); mode_init/side_init: initial contact state.
-    rec: (n, NREC) array for impact records (n may be 0).  diag: NDIAG
-    diagnostics (zeroed here).  z_out: final state; returns final mode*side
-    code (mode + 10*side) for continuation runs.
+    z_init: (x, x', y, y'); code_init: initial contact state (encode_contact).
+    pid: PID eigen-data or None (CID); fric: (a_f,) or None (frictionless):
+    None prunes that path at compile time.  rec: (n, NREC) impact records
+    (n may be 0).  diag: NDIAG diagnostics (zeroed here).  z_out: final state.
+    Returns the final contact code, for continuation runs.
     """
     for i in range(NDIAG):
         diag[i] = 0.0
@@ -471,6 +513,7 @@ def run(p, z_init, mode_init, side_init, pid, rec, diag, z_out):
     cf = np.zeros(NT, dtype=np.complex128)
     poly = np.zeros(2)
     ev = np.zeros(4)
+    ev2 = np.zeros(4)
     z = z_init.copy()
     d = p[P_D]
     half = 0.5 * d
@@ -479,11 +522,21 @@ def run(p, z_init, mode_init, side_init, pid, rec, diag, z_out):
     t_win = p[P_TWIN]
     period = 2.0 * math.pi
     max_ev = p[P_MAXEV]
-    mode = mode_init
-    side = side_init
+    a_f = 0.0
+    if fric is not None:
+        a_f = fric[0]
+    sigma = code_init // 100 - 1
+    side = (code_init % 100) // 10 - 1
+    mode = code_init % 10
     if d == 0.0:
         mode = MODE_LOCKED
     escape = 0
+    escape_v = 0
+    if fric is not None:
+        if mode == MODE_FREE and z[3] == z[1]:
+            mode = MODE_FLOOR
+        elif mode == MODE_FREE and sigma == 0:
+            sigma = 1 if z[3] > z[1] else -1
     diag[D_E0] = _energy(z, p)
     count_period = 0.0
     period_index = math.floor(t / period)
@@ -492,31 +545,66 @@ def run(p, z_init, mode_init, side_init, pid, rec, diag, z_out):
     while t < t_end:
         tau_max = t_end - t
         if mode == MODE_FREE:
-            _build_free(kap, cx, cy, poly, z, t, p, pid)
+            _build_free(kap, cx, cy, poly, z, t, p, pid, fric, sigma)
+        elif mode == MODE_FLOOR:
+            _build_combined(kap, cx, cy, poly, z, t, p, z[2] - z[0])
+            if fric is not None:
+                slide = _floor_decision(kap, cx, a_f)
+                if slide != 0:
+                    mode = MODE_FREE
+                    sigma = slide
+                    escape_v = -1
+                    continue
         else:
             _build_combined(kap, cx, cy, poly, z, t, p, side * half if mode == MODE_STUCK else 0.0)
-            if mode == MODE_STUCK and not _stays_stuck(kap, cx, p, side):
+            if mode == MODE_STUCK and not _stays_stuck(kap, cx, p, side, a_f):
                 mode = MODE_FREE
                 escape = side
+                if fric is not None:
+                    sigma = -side
+                    escape_v = -1
                 continue
         for k in range(NT):
             cv[k] = cx[k] * kap[k]
-        # locate the next event
+        # locate the next event: ev_kind 1 impact/release/floor exit, 2 sliding stops
+        ev_kind = 1
         if mode == MODE_FREE:
             for k in range(NT):
                 cs[k] = cy[k] - cx[k]
             delta = 1e-12 * (_bound(kap, cs, 0) + d)
             first_exit(kap, cs, poly[0], poly[1], -half, half, tau_max, escape, delta, ev)
+            if fric is not None:
+                # sigma * s' > 0 while sliding; the slide ends where it reaches 0
+                for k in range(NT):
+                    cq[k] = sigma * cs[k] * kap[k]
+                cq[6] += sigma * poly[0]
+                dv = 1e-12 * (_bound(kap, cq, 0) + 2.0 * abs(poly[1]))
+                first_exit(kap, cq, 2.0 * sigma * poly[1], 0.0, 0.0, np.inf, min(ev[0], tau_max),
+                           escape_v, dv, ev2)
+                diag[D_STEPS] += ev2[3]
+                if ev2[0] < ev[0]:
+                    ev[0] = ev2[0]
+                    ev[1] = 0.0
+                    ev_kind = 2
         elif mode == MODE_STUCK:
             for k in range(NT):
                 cq[k] = side * cx[k] * kap[k] * kap[k]
-            level = -p[P_WP] ** 2 * half
-            delta = 1e-12 * (_bound(kap, cq, 0) - level)
-            # just stuck with the contact force at round-off from zero: the
-            # force is known to grow (see _stays_stuck), so leave that edge
+            level = -p[P_WP] ** 2 * half + a_f
+            delta = 1e-12 * (_bound(kap, cq, 0) + abs(level))
+            # just stuck with the contact force at round-off from its limit: the
+            # force is known to move away from it (see _stays_stuck)
             q0 = _deriv_at0(kap, cq, 0)
             esc = 1 if level - q0 < delta else 0
             first_exit(kap, cq, 0.0, 0.0, -np.inf, level, tau_max, esc, delta, ev)
+        elif mode == MODE_FLOOR:
+            for k in range(NT):
+                cq[k] = cx[k] * kap[k] * kap[k]
+            delta = 1e-12 * (_bound(kap, cq, 0) + a_f)
+            q0 = _deriv_at0(kap, cq, 0)
+            esc = 0
+            if a_f - abs(q0) < delta:
+                esc = 1 if q0 > 0.0 else -1
+            first_exit(kap, cq, 0.0, 0.0, -a_f, a_f, tau_max, esc, delta, ev)
         else:
             ev[0] = np.inf
             ev[1] = 0.0
@@ -535,9 +623,15 @@ def run(p, z_init, mode_init, side_init, pid, rec, diag, z_out):
             diag[D_X2WIN] += _int_prod(kap, cx, cx, max(t_win - t, 0.0), tau)
         if mode != MODE_FREE:
             diag[D_STUCKTIME] += tau
+        s_start = z[2] - z[0]
         _state(kap, cx, cy, poly[0], poly[1], tau, z)
+        if fric is not None:
+            if mode == MODE_FREE:
+                # s' keeps its sign on a sliding segment: the work is exact
+                diag[D_FRICTION] += p[P_MU] * a_f * sigma * (z[2] - z[0] - s_start)
         t = t + tau
         escape = 0
+        escape_v = 0
         if ev[0] > tau_max:
             break
         # period bookkeeping for the event cap
@@ -550,12 +644,28 @@ def run(p, z_init, mode_init, side_init, pid, rec, diag, z_out):
             diag[D_CAP] = 1.0
             break
         ev_side = int(ev[1])
+        if fric is not None:
+            if ev_kind == 2:
+                # the slide ends: the floor holds the mass or it slides back
+                z[3] = z[1]
+                mode = MODE_FLOOR
+                continue
+            if mode == MODE_FLOOR:
+                # the floor can no longer drag the mass along: it slides
+                z[3] = z[1]
+                mode = MODE_FREE
+                sigma = -ev_side
+                escape_v = -1
+                continue
         if mode == MODE_STUCK:
             # release: the wall stops holding the mass, which leaves with s' = 0
             mode = MODE_FREE
             z[2] = z[0] + side * half
             z[3] = z[1]
             escape = side
+            if fric is not None:
+                sigma = -side
+                escape_v = -1
             continue
         # impact on wall ev_side
         s_now = z[2] - z[0]
@@ -575,10 +685,12 @@ def run(p, z_init, mode_init, side_init, pid, rec, diag, z_out):
             diag[D_IMPACTS_WIN] += 1.0
         stuck = _apply_impact(z, ev_side, p, diag)
         side = ev_side
+        if fric is not None:
+            sigma = -side
         if not stuck:
             # a rebound whose excursion v^2 / (2 a) cannot clear the contact
             # tolerance is unresolvable: the mass stays at the wall
-            _build_free(kap, cx, cy, poly, z, t, p, pid)
+            _build_free(kap, cx, cy, poly, z, t, p, pid, fric, sigma)
             for k in range(NT):
                 cs[k] = cy[k] - cx[k]
             push = side * (_deriv_at0(kap, cs, 2) + 2.0 * poly[1])
@@ -590,12 +702,14 @@ def run(p, z_init, mode_init, side_init, pid, rec, diag, z_out):
         if stuck:
             # decide whether the wall holds the mass
             _build_combined(kap, cx, cy, poly, z, t, p, side * half)
-            if _stays_stuck(kap, cx, p, side):
+            if _stays_stuck(kap, cx, p, side, a_f):
                 mode = MODE_STUCK
                 diag[D_STICKS] += 1.0
             else:
                 mode = MODE_FREE
                 escape = side
+                if fric is not None:
+                    escape_v = -1
         else:
             mode = MODE_FREE
             escape = side
@@ -614,4 +728,4 @@ def run(p, z_init, mode_init, side_init, pid, rec, diag, z_out):
     diag[D_TEND] = t
     for i in range(4):
         z_out[i] = z[i]
-    return mode + 10 * side
+    return encode_contact(mode, side, sigma)

@@ -43,6 +43,7 @@ TWO_IPC_RANGES = [
 ]
 E_TREND_PID = [(rp, [_pid(0.01, e, rp) for e in (0.25, 0.45, 0.65)]) for rp in (0.5, 1.0, 1.5)]
 TMD_PAPER = {"f": 0.99, "beta_t": 0.06}
+FRICTION = [{"damper": "cid", "mu": 0.01, "e": 0.25, **({"nu": nu} if nu else {})} for nu in (0.0, 0.05, 0.2, 0.5)]
 
 
 def needed_curves() -> list:
@@ -50,7 +51,7 @@ def needed_curves() -> list:
     specs = [row[2] for row in X_M_AT_OPTIMUM + TWO_IPC_RANGES]
     for _, group in E_TREND_PID:
         specs.extend(group)
-    return specs
+    return specs + FRICTION
 
 
 def _rel(ours, paper):
@@ -124,6 +125,23 @@ def e_trend_rows(datasets: dict) -> list:
     return rows
 
 
+def friction_rows(datasets: dict) -> list:
+    """Fig. 10: friction lowers the CID's efficiency (X_m at optimum rises with nu), default scale."""
+    dss = [datasets.get(curve_id(spec)) for spec in FRICTION]
+    if any(ds is None for ds in dss):
+        return []
+    rows = []
+    for s in [str(x) for x in dss[0]["start"].values]:
+        xms = [optimum(ds, s)[1] for ds in dss]
+        rises = bool(np.all(np.diff(xms) >= 0) and xms[-1] > xms[0])
+        rows.append({"figure": "10", "case": "CID mu=0.01 e=0.25, nu=0/0.05/0.2/0.5 (1.5 Hz, 1 cm)",
+                     "quantity": "friction lowers efficiency (X_m at optimum rises with nu)", "start": s,
+                     "paper": "yes", "reproduced": ("yes" if rises else "no") + " (" +
+                     "/".join(f"{x:.3f}" for x in xms) + ")", "rel_difference": math.nan,
+                     "within_10pct": rises, "reason": "" if rises else "X_m at optimum is not monotone in nu"})
+    return rows
+
+
 def tmd_rows(tmd: dict | None, datasets: dict) -> list:
     if tmd is None:
         return []
@@ -146,7 +164,8 @@ def tmd_rows(tmd: dict | None, datasets: dict) -> list:
 
 
 def paper_vs_reproduced(datasets: dict, tmd: dict | None) -> pd.DataFrame:
-    rows = x_m_rows(datasets) + two_ipc_rows(datasets) + e_trend_rows(datasets) + tmd_rows(tmd, datasets)
+    rows = (x_m_rows(datasets) + two_ipc_rows(datasets) + e_trend_rows(datasets) + friction_rows(datasets)
+            + tmd_rows(tmd, datasets))
     cols = ["figure", "case", "quantity", "start", "paper", "reproduced", "rel_difference", "within_10pct",
             "g_optimum", "reason"]
     return pd.DataFrame(rows, columns=cols)

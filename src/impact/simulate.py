@@ -25,31 +25,34 @@ STICK_VELOCITY = 1e-8
 
 
 _WARM: set = set()
+FREE_FLIGHT = K.encode_contact(K.MODE_FREE, 0, 0)
 
 
 def _cache_dir() -> Path:
     return Path(os.environ.get("NUMBA_CACHE_DIR") or Path(K.__file__).parent / "__pycache__")
 
 
-def ensure_compiled(kind: str) -> None:
+def ensure_compiled(kind: str, friction: bool = False) -> None:
     """Compile (or load from numba's on-disk cache) the kernel for one damper kind.
 
     Done under an exclusive file lock so that processes starting together
     (parallel Snakemake jobs) never write the cache at the same time: the first
     compiles and stores, the others wait and then load.
     """
-    if kind in _WARM:
+    key = (kind, friction)
+    if key in _WARM:
         return
     folder = _cache_dir()
     folder.mkdir(parents=True, exist_ok=True)
     with open(folder / "impact-jit.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
         try:
-            probe = System(kind, mu=0.01, beta=0.05, e=0.5, gap=1.0, rp=1.0 if kind == "pid" else 0.0)
-            _run_kernel(probe, 0.9, Protocol(periods=1.0, average_from=0.5), np.zeros(4), K.MODE_FREE, 0, 1)
+            probe = System(kind, mu=0.01, beta=0.05, e=0.5, gap=1.0, rp=1.0 if kind == "pid" else 0.0,
+                           nu=0.1 if friction else 0.0)
+            _run_kernel(probe, 0.9, Protocol(periods=1.0, average_from=0.5), np.zeros(4), FREE_FLIGHT, 1)
         finally:
             fcntl.flock(lock, fcntl.LOCK_UN)
-    _WARM.add(kind)
+    _WARM.add(key)
 
 
 def pid_data(system: System, r: float):
@@ -78,14 +81,14 @@ def pid_data(system: System, r: float):
 def initial_state(system: System, start: str):
     """Rest, with the damper mass centred or resting against a wall.
 
-    Returns (state, mode, side); a mass placed at a wall starts in contact and
-    the kernel decides at once whether the wall holds it.
+    Returns (state, contact code); a mass placed at a wall starts in contact
+    and the kernel decides at once whether the wall holds it.
     """
     half = 0.5 * system.gap
     if start == "centre" or system.gap == 0.0:
-        return np.zeros(4), K.MODE_FREE, 0
+        return np.zeros(4), K.encode_contact(K.MODE_FREE, 0, 0)
     side = 1 if start == "right" else -1
-    return np.array([0.0, 0.0, side * half, 0.0]), K.MODE_STUCK, side
+    return np.array([0.0, 0.0, side * half, 0.0]), K.encode_contact(K.MODE_STUCK, side, 0)
 
 
 def _check_resonance(system: System, r: float):
@@ -139,8 +142,9 @@ class RunResult:
 
 def _diagnostics(diag: np.ndarray) -> dict:
     work = diag[K.D_WORK]
-    residual = work - diag[K.D_VISC] - diag[K.D_IMPLOSS] - (diag[K.D_E1] - diag[K.D_E0])
-    scale = max(abs(work), diag[K.D_VISC] + diag[K.D_IMPLOSS], 1e-300)
+    losses = diag[K.D_VISC] + diag[K.D_IMPLOSS] + diag[K.D_FRICTION]
+    residual = work - losses - (diag[K.D_E1] - diag[K.D_E0])
+    scale = max(abs(work), losses, 1e-300)
     return {
         "impacts": int(diag[K.D_IMPACTS]),
         "impacts_in_window": int(diag[K.D_IMPACTS_WIN]),
@@ -151,6 +155,7 @@ def _diagnostics(diag: np.ndarray) -> dict:
         "work_input": float(work),
         "viscous_dissipation": float(diag[K.D_VISC]),
         "impact_losses": float(diag[K.D_IMPLOSS]),
+        "friction_work": float(diag[K.D_FRICTION]),
         "time_in_contact": float(diag[K.D_STUCKTIME]),
         "search_steps": int(diag[K.D_STEPS]),
         "event_cap_reached": bool(diag[K.D_CAP]),
@@ -166,25 +171,27 @@ def simulate(system: System, r: float, protocol: Protocol = Protocol(), *, recor
     the protocol's rest state (continuation sweeps, closed-form orbits).
     """
     _check_resonance(system, r)
-    if system.nu > 0.0:
-        raise NotImplementedError("Coulomb friction (nu > 0) is not in the event-driven core yet")
     if state is None:
-        z0, mode, side = initial_state(system, protocol.start)
+        z0, code = initial_state(system, protocol.start)
     else:
         z0 = np.asarray(state, dtype=float)
-        code = 0 if contact is None else int(contact)
-        side = int(round(code / 10)) if code else 0
-        mode = code - 10 * side
-    ensure_compiled(system.kind)
-    return _run_kernel(system, r, protocol, z0, mode, side, record, t0)
+        code = FREE_FLIGHT if contact is None else int(contact)
+    ensure_compiled(system.kind, system.nu > 0.0)
+    return _run_kernel(system, r, protocol, z0, code, record, t0)
 
 
-def _run_kernel(system, r, protocol, z0, mode, side, record, t0=0.0) -> "RunResult":
+def friction_data(system: System):
+    """(a_f,) in model units, or None: a frictionless run never compiles the friction path."""
+    return np.array([system.friction_accel]) if system.nu > 0.0 else None
+
+
+def _run_kernel(system, r, protocol, z0, code, record, t0=0.0) -> "RunResult":
     p = param_vector(system, r, protocol, t0)
     rec = np.zeros((int(record), K.NREC))
     diag = np.zeros(K.NDIAG)
     z_out = np.zeros(4)
-    final = K.run(p, np.asarray(z0, dtype=float), mode, side, pid_data(system, r), rec, diag, z_out)
+    final = K.run(p, np.asarray(z0, dtype=float), int(code), pid_data(system, r), friction_data(system),
+                  rec, diag, z_out)
     return _result(system, r, protocol, diag, z_out, final, rec)
 
 

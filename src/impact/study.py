@@ -27,7 +27,18 @@ def curve_id(spec: dict) -> str:
         name += f"_rp{_fmt(spec['rp'])}"
     if spec.get("nu", 0.0):
         name += f"_nu{_fmt(spec['nu'])}"
+        if "frequency_hz" in spec:
+            name += f"_f{_fmt(spec['frequency_hz'])}"
+        if "unit_m" in spec:
+            name += f"_L{_fmt(spec['unit_m'])}"
     return name
+
+
+def friction_scale(cfg: dict, spec: dict) -> dict:
+    """Structure frequency and length unit that set a curve's friction (curve keys override config)."""
+    base = cfg.get("friction", {})
+    return {key: spec.get(key, base.get(key, default))
+            for key, default in (("frequency_hz", 1.5), ("unit_m", 0.01))}
 
 
 def figure_curves(cfg: dict, figure: str) -> dict:
@@ -77,10 +88,9 @@ def check_config(cfg: dict) -> None:
 
 def curve_system(cfg: dict, spec: dict, gap_ratio: float) -> System:
     structure = cfg["structure"]
-    friction = cfg.get("friction", {})
     kw = dict(rp=spec.get("rp", 0.0), force_ratio=structure["force_ratio"], phase=cfg["protocol"].get("phase", 0.0))
     if spec.get("nu", 0.0):
-        kw.update(nu=spec["nu"], frequency_hz=friction.get("frequency_hz", 1.5), unit_m=friction.get("unit_m", 0.01))
+        kw.update(nu=spec["nu"], **friction_scale(cfg, spec))
     if spec["damper"] == "cid" and "rp" in spec:
         raise ParameterError("rp is only for damper pid")
     return System.from_gap_ratio(spec["damper"], mu=spec["mu"], beta=structure["beta"], e=spec["e"],

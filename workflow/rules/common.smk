@@ -3,7 +3,7 @@
 import os
 
 from impact import comparison
-from impact.study import all_curves, check_config, curve_id, figure_curves
+from impact.study import all_curves, check_config, curve_id, figure_curves, friction_scale
 
 check_config(config)
 
@@ -38,7 +38,7 @@ def curve_params(wildcards):
     spec = CURVES[wildcards.curve]
     out = {"structure": config["structure"], "protocol": config["protocol"], "spec": spec}
     if spec.get("nu", 0.0):
-        out["friction"] = config["friction"]
+        out["friction"] = friction_scale(config, spec)
     return out
 
 

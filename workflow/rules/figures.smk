@@ -11,6 +11,9 @@ rule figure:
         pdf="results/figures/{fig}.pdf",
     params:
         figure=lambda wc: config["figures"][wc.fig],
+    threads: 1
+    resources:
+        runtime=5, mem_mb=1000,
     conda:
         ENV
     log:

@@ -9,6 +9,9 @@ rule sweep_curve:
         "results/sweeps/{curve}.nc",
     params:
         study=curve_params,
+    threads: 1
+    resources:
+        runtime=30, mem_mb=1000,
     conda:
         ENV
     log:

@@ -8,6 +8,9 @@ rule paper_vs_reproduced:
         library=LIB_TABLE,
     output:
         "results/tables/paper_vs_reproduced.csv",
+    threads: 1
+    resources:
+        runtime=5, mem_mb=1000,
     conda:
         ENV
     log:

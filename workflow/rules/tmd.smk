@@ -10,6 +10,9 @@ rule tmd_optimum:
         mu=config["tmd"]["mu"],
         beta=config["structure"]["beta"],
         force_ratio=config["structure"]["force_ratio"],
+    threads: 1
+    resources:
+        runtime=5, mem_mb=500,
     conda:
         ENV
     log:

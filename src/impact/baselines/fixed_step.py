@@ -122,6 +122,29 @@ def hermite_crossing(s0: float, v0: float, s1: float, v1: float, h: float, side:
     return min(best, 1.0) * h
 
 
+def hermite_excursion(s0: float, v0: float, s1: float, v1: float, h: float, half: float) -> int:
+    """Wall (+1/-1) that the cubic Hermite interpolant of s passes beyond inside the step, else 0."""
+    hv0, hv1 = h * v0, h * v1
+    a3 = 2.0 * s0 + hv0 - 2.0 * s1 + hv1
+    a2 = -3.0 * s0 - 2.0 * hv0 + 3.0 * s1 - hv1
+    a1 = hv0
+    # critical points of p(u) = a3 u^3 + a2 u^2 + a1 u + s0 in (0, 1)
+    crit = []
+    if a3 != 0.0:
+        disc = a2 * a2 - 3.0 * a3 * a1
+        if disc >= 0.0:
+            sq = math.sqrt(disc)
+            crit = [(-a2 + sq) / (3.0 * a3), (-a2 - sq) / (3.0 * a3)]
+    elif a2 != 0.0:
+        crit = [-a1 / (2.0 * a2)]
+    for u in sorted(crit):
+        if 0.0 < u < 1.0:
+            p = ((a3 * u + a2) * u + a1) * u + s0
+            if abs(p) > half:
+                return 1 if p > 0.0 else -1
+    return 0
+
+
 def locate(fun, h: float, f0: float, fh: float, tol: float) -> float:
     """Root in (0, h] of fun with f0 <= 0 < fh: Illinois regula falsi."""
     a, fa, b, fb = 0.0, min(f0, 0.0), h, fh
@@ -273,8 +296,13 @@ def simulate_rk4(system: System, r: float, t_end: float, t_window: float, start:
         nfev += 4
         cands = []
         s1 = z1[2] - z1[0]
+        wside = 0
         if abs(s1) > half:
             wside = 1 if s1 > 0.0 else -1
+        elif (z[3] - z[1]) * (z1[3] - z1[1]) < 0.0:
+            # s has an extremum inside the step: a brief excursion beyond a wall?
+            wside = hermite_excursion(z[2] - z[0], z[3] - z[1], s1, z1[3] - z1[1], h, half)
+        if wside:
             tau = hermite_crossing(z[2] - z[0], z[3] - z[1], s1, z1[3] - z1[1], h, wside, half)
             cands.append((tau, "wall", wside))
         if sf != 0.0 and -sf * (z1[3] - z1[1]) > 0.0:

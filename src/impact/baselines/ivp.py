@@ -35,6 +35,7 @@ import math
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
 
 from . import (
     Affine, ImpactLog, S_VEL, Functional, check_inputs, default_v_stick, free_affine,
@@ -50,14 +51,26 @@ _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
 MAX_IDLE_PHASES = 200
 
 
-def make_event(g: Functional, r: float, phase: float, direction: int):
-    """A scipy event function g(t, z) with terminal / direction attributes."""
+def make_event(g: Functional, r: float, phase: float, direction: int, t0: float | None = None,
+               at_t0: float = 0.0):
+    """A scipy event function g(t, z) with terminal / direction attributes.
+
+    With t0 given the function returns ``at_t0`` for t <= t0: used for events that
+    start exactly at zero, so that scipy neither reports a root at the start of
+    the phase nor trips over an interpolant that is off there (LSODA).
+    """
     w0, w1, w2, w3 = (float(v) for v in g.w)
     c0, cf = float(g.w0), float(g.wf)
     sin = math.sin
 
-    def event(t, z):
-        return w0 * z[0] + w1 * z[1] + w2 * z[2] + w3 * z[3] + c0 + cf * sin(r * t + phase)
+    if t0 is None:
+        def event(t, z):
+            return w0 * z[0] + w1 * z[1] + w2 * z[2] + w3 * z[3] + c0 + cf * sin(r * t + phase)
+    else:
+        def event(t, z):
+            if t <= t0:
+                return at_t0
+            return w0 * z[0] + w1 * z[1] + w2 * z[2] + w3 * z[3] + c0 + cf * sin(r * t + phase)
 
     event.terminal = True
     event.direction = direction
@@ -87,8 +100,16 @@ class Segments:
         self.max_pen = -math.inf
         self.half = 0.5 * system.gap
 
-    def run(self, aff: Affine, events: list, t0: float, z0: np.ndarray, first_step=None):
+    def run(self, aff: Affine, events: list, t0: float, z0: np.ndarray, first_step=None,
+            graze: list | None = None):
         """Integrate one phase from (t0, z0) to the first terminal event or t_end.
+
+        events: [(g, direction)] with g a :class:`Functional`; all terminal.
+        graze: [(g, index)] wall functionals g (event ``events[index]``, direction +1)
+        whose brief excursions above zero inside a single solver step must not be
+        missed: a non-terminal event on the extrema of s (s' = 0) checks g there,
+        and a positive extremum is traced back, on the dense output, to the
+        crossing before it, which then ends the phase as event ``index``.
 
         Returns (t, z, fired, message): fired is the index of the event that ended
         the phase (None at t_end); message is None or the solver's failure message.
@@ -97,6 +118,7 @@ class Segments:
         r, ph = self.r, self.phase
         sin = math.sin
         counter = [0]
+        z0 = np.asarray(z0, float)
 
         def rhs(t, z):
             counter[0] += 1
@@ -107,32 +129,84 @@ class Segments:
             opts["jac"] = lambda t, z: A
         if first_step is not None:
             opts["first_step"] = min(float(first_step), self.t_end - t0)
+        specs = list(events)
+        if graze:
+            specs.append((Functional(S_VEL), 0))
+        all_events = []
+        for g, direction in specs:
+            g0 = g(t0, z0, r, ph)
+            size = float(np.abs(g.w) @ np.abs(z0)) + abs(g.w0) + abs(g.wf)
+            if abs(g0) <= 1e-13 * size:
+                # starts at zero: pin the start value on the side it leaves towards
+                if direction:
+                    at0 = -direction * 1e-300
+                else:
+                    at0 = math.copysign(1e-300, g.rate(t0, z0, aff, r, ph))
+                ev = make_event(g, r, ph, direction, t0, at0)
+            else:
+                ev = make_event(g, r, ph, direction)
+            all_events.append(ev)
+        if graze:
+            all_events[-1].terminal = False
         sol = solve_ivp(rhs, (t0, self.t_end), np.asarray(z0, float), method=self.method,
-                        rtol=self.rtol, atol=self.atol, events=events or None,
+                        rtol=self.rtol, atol=self.atol, events=all_events or None,
                         dense_output=True, **opts)
         self.nfev += counter[0]
         if sol.status == -1:
             return t0, np.asarray(z0, float), None, sol.message
         ts = sol.t
-        self.n_steps += len(ts) - 1
-        s = sol.y[2] - sol.y[0]
-        self.max_pen = max(self.max_pen, float(np.max(np.abs(s))) - self.half)
-        self._quadrature(sol)
+        t_stop = float(ts[-1])
+        z_stop = sol.y[:, -1].copy()
         fired = None
         if sol.status == 1:
-            for i, te in enumerate(sol.t_events):
+            for i, te in enumerate(sol.t_events[:len(events)]):
                 if te.size and te[-1] == ts[-1]:
                     fired = i
                     break
-        return float(ts[-1]), sol.y[:, -1].copy(), fired, None
+        if graze:
+            hit = self._missed_crossing(sol, graze, t_stop)
+            if hit is not None:
+                t_stop, fired = hit
+                z_stop = sol.sol(t_stop)
+        n_in = int(np.searchsorted(ts, t_stop, side="left"))  # step points before t_stop
+        self.n_steps += n_in
+        s = np.append(sol.y[2, :n_in] - sol.y[0, :n_in], z_stop[2] - z_stop[0])
+        self.max_pen = max(self.max_pen, float(np.max(np.abs(s))) - self.half)
+        self._quadrature(sol, t_stop)
+        return t_stop, z_stop, fired, None
 
-    def _quadrature(self, sol):
+    def _missed_crossing(self, sol, graze, t_stop):
+        """Earliest wall crossing hidden inside one step (found from an extremum of s)."""
+        te_all = sol.t_events[-1]
+        ye_all = sol.y_events[-1]
+        best = None
+        r, ph = self.r, self.phase
+        for te, ye in zip(te_all, ye_all):
+            if te >= t_stop:
+                break
+            for g, index in graze:
+                if g(te, ye, r, ph) <= 0.0:
+                    continue
+                # last step point before the extremum is inside (else the event would have fired)
+                k = int(np.searchsorted(sol.t, te, side="right")) - 1
+                a = float(sol.t[max(k, 0)])
+                fun = lambda tt: g(tt, sol.sol(tt), r, ph)  # noqa: E731
+                if fun(a) > 0.0 or a >= te:
+                    continue
+                root = brentq(fun, a, float(te), xtol=1e-15 * max(1.0, abs(te)), rtol=4 * np.finfo(float).eps)
+                if best is None or root < best[0]:
+                    best = (root, index)
+            if best is not None:
+                break
+        return best
+
+    def _quadrature(self, sol, t_stop):
         ts = sol.t
         tw = self.t_window
-        if ts[-1] <= tw or len(ts) < 2:
+        if t_stop <= tw or len(ts) < 2:
             return
         a = np.maximum(ts[:-1], tw)
-        b = ts[1:]
+        b = np.minimum(ts[1:], t_stop)
         keep = b > a
         a, b = a[keep], b[keep]
         if a.size == 0:
@@ -209,8 +283,7 @@ def simulate_ivp(system: System, r: float, t_end: float, t_window: float, start:
                     break
             if released is None:
                 t0 = t
-                events = [make_event(g, r, ph, +1) for g, _ in exits]
-                t, z, fired, msg = seg.run(stuck, events, t, z)
+                t, z, fired, msg = seg.run(stuck, [(g, +1) for g, _ in exits], t, z)
                 if msg:
                     status = f"failed: {msg}"
                     break
@@ -228,12 +301,12 @@ def simulate_ivp(system: System, r: float, t_end: float, t_window: float, start:
         # free flight (sliding with sign sf when friction acts)
         _, sf, fs = mode
         aff = free_affine(system, sf)
-        ev_funcs = [make_event(g, r, ph, +1) for g, _ in walls]
+        ev_funcs = [(g, +1) for g, _ in walls]
         if sf != 0.0:
             # sliding ends when s' reaches zero: -sf * s' crosses zero upward
-            ev_funcs.append(make_event(Functional(-sf * S_VEL), r, ph, +1))
+            ev_funcs.append((Functional(-sf * S_VEL), +1))
         t0 = t
-        t, z, fired, msg = seg.run(aff, ev_funcs, t, z, fs)
+        t, z, fired, msg = seg.run(aff, ev_funcs, t, z, fs, graze=[(g, i) for i, (g, _) in enumerate(walls)])
         if msg:
             status = f"failed: {msg}"
             break

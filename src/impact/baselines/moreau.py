@@ -29,7 +29,8 @@ active else +inf): the minimiser of the convex 1-D problem
 (u - u_free)^2 / (2 w) + mu a_f h |u| + indicator[L, U](u).
 
 Impacts are not located in time: an impact is reported at the end time of a
-step in which a wall impulse was applied, with pre/post = v at the start/end of
+step in which a wall impulse was applied (a jump of u above 1e-10 force_ratio; smaller
+ones are round-off), with pre/post = v at the start/end of
 that step; consecutive impulse steps at the same wall (persistent contact, e.g.
 e = 0) count as one impact.  Positions may penetrate the walls by O(h |u|);
 ``max_penetration`` reports it.  The scheme is first order with impacts (second
@@ -95,6 +96,7 @@ def simulate_moreau_jean(system: System, r: float, t_end: float, t_window: float
     status = "ok"
     th1 = 1.0 - theta
     inf = math.inf
+    tiny = 1e-10 * f  # velocity jumps below this are round-off, not impulses
 
     k = 0
     while True:
@@ -136,11 +138,11 @@ def simulate_moreau_jean(system: System, r: float, t_end: float, t_window: float
         lo = -e * u_minus if left else -inf
         hi = -e * u_minus if right else inf
         u_plus = min(max(u_fr, lo), hi) if lo <= hi else 0.5 * (lo + hi)
+        # a wall impulse (beyond round-off) was applied?
         side = 0
-        if u_plus < u_fr:
-            side = 1
-        elif u_plus > u_fr:
-            side = -1
+        jump = u_plus - u_fr
+        if abs(jump) > tiny + 1e-12 * abs(u_free):
+            side = 1 if jump < 0.0 else -1
         P = (u_plus - u_free) / w
         # v+ = v_free + A^-1 G^T P, G^T = (-1, 1)
         nxd = vfx + P * (i12 - i11)

@@ -32,7 +32,7 @@ from . import (
     ImpactLog, S_VEL, Functional, check_inputs, free_affine, initial_state, leaves_now, make_result,
     merged_velocity, stuck_affine, stuck_exit_functionals, wall_gap,
 )
-from .ivp import MAX_IDLE_PHASES, Segments, make_event
+from .ivp import MAX_IDLE_PHASES, Segments
 from ..params import System
 
 
@@ -109,7 +109,7 @@ def simulate_penalty(system: System, r: float, t_end: float, t_window: float, st
                     break
             if released is None:
                 t0 = t
-                t, z, fired, msg = seg.run(stuck, [make_event(g, r, ph, +1) for g, _ in exits], t, z)
+                t, z, fired, msg = seg.run(stuck, [(g, +1) for g, _ in exits], t, z)
                 if msg:
                     status = f"failed: {msg}"
                     break
@@ -128,16 +128,17 @@ def simulate_penalty(system: System, r: float, t_end: float, t_window: float, st
         sf = mode[1]
         aff = free_affine(system, sf, contact_of(cside))
         if cside == 0:
-            events = [make_event(wall_gap(system, +1), r, ph, +1), make_event(wall_gap(system, -1), r, ph, +1)]
+            events = [(wall_gap(system, +1), +1), (wall_gap(system, -1), +1)]
             tags = [("enter", +1), ("enter", -1)]
         else:
-            events = [make_event(wall_gap(system, cside), r, ph, -1)]
+            events = [(wall_gap(system, cside), -1)]
             tags = [("exit", cside)]
         if sf != 0.0:
-            events.append(make_event(Functional(-sf * S_VEL), r, ph, +1))
+            events.append((Functional(-sf * S_VEL), +1))
             tags.append(("slide", 0))
         t0 = t
-        t, z, fired, msg = seg.run(aff, events, t, z)
+        graze = [(wall_gap(system, +1), 0), (wall_gap(system, -1), 1)] if cside == 0 else None
+        t, z, fired, msg = seg.run(aff, events, t, z, graze=graze)
         if msg:
             status = f"failed: {msg}"
             break

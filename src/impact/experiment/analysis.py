@@ -96,12 +96,13 @@ def _uniform_step(t: np.ndarray, rtol: float = 1e-6) -> float:
 def dominant_frequency(t: Sequence[float], x: Sequence[float]) -> float:
     """Frequency [1/time unit of t] of the largest spectral peak of x (mean removed).
 
-    Hann window, zero-padded FFT, parabolic interpolation of the log-magnitude
-    peak; a starting value, not a precision estimate.
+    Linear trend removed, Hann window, zero-padded FFT, parabolic
+    interpolation of the log-magnitude peak; a starting value, not a
+    precision estimate.
     """
     t, x = _series(t, x)
     dt = float(np.median(np.diff(t)))
-    y = (x - x.mean()) * np.hanning(x.size)
+    y = signal.detrend(x) * np.hanning(x.size)
     nfft = 1 << int(math.ceil(math.log2(8 * x.size)))
     spec = np.abs(np.fft.rfft(y, nfft))
     spec[0] = 0.0
@@ -122,25 +123,30 @@ def dominant_frequency(t: Sequence[float], x: Sequence[float]) -> float:
 
 @dataclass(frozen=True)
 class LogDecrement:
-    """Per-window log decrement of a free decay.
+    """Log decrement of a free decay, per cycle against amplitude.
 
-    ``amplitude`` is the envelope amplitude at the window centre ``t`` (same
-    unit as the input x), ``delta`` the log decrement per cycle in that window,
-    ``frequency`` the damped frequency (1/time unit of t), ``rms_residual``
-    the rms misfit of the local damped-sinusoid model (same unit as x: compare
-    it with the sensor noise -- much larger means the decay is not locally a
-    damped sinusoid, e.g. impacts).  ``mean`` is the average delta over the
-    windows, ``std`` their standard deviation.
+    Per pair of consecutive windows k, k+1: ``delta`` the log decrement per
+    cycle, ``amplitude`` the geometric mean of the two window amplitudes (same
+    unit as the input x), ``t`` the midpoint of the two window centres,
+    ``frequency`` the damped frequency (1/time unit of t).  ``mean`` is the
+    average delta over the pairs, ``std`` their standard deviation (the
+    per-cycle scatter).  Per window: ``window_t`` (centre), ``window_amplitude``
+    (envelope amplitude at the centre) and ``window_rms_residual``, the rms
+    misfit of the local damped-sinusoid model -- compare it with the sensor
+    noise: much larger means the cycle is not locally a damped sinusoid
+    (impacts, beating, clipping).
     """
 
     t: np.ndarray
     amplitude: np.ndarray
     delta: np.ndarray
     frequency: np.ndarray
-    rms_residual: np.ndarray
-    cycles: int
     mean: float
     std: float
+    cycles: int
+    window_t: np.ndarray
+    window_amplitude: np.ndarray
+    window_rms_residual: np.ndarray
 
 
 def upward_crossings(t: np.ndarray, y: np.ndarray, hysteresis: float = 0.0) -> np.ndarray:
@@ -192,27 +198,28 @@ def log_decrement(t: Sequence[float], x: Sequence[float], *, cycles: int = 1,
                   min_amplitude: float | None = None, lowpass: bool = True) -> LogDecrement:
     """Logarithmic decrement per cycle against amplitude, from a free decay.
 
-    The record is cut into consecutive windows of ``cycles`` cycles, bounded by
-    upward zero crossings found on a zero-phase low-passed copy of the signal
-    (Butterworth, cut-off 3x the dominant frequency; crossings need the signal
-    to have gone below minus three noise rms since the previous one, so
-    sensor noise cannot create false cycles).  In each window the *raw*
-    samples are fitted by least squares with a locally damped sinusoid plus
-    offset, ``exp(-s tau) (a cos w tau + b sin w tau) + c`` (tau from the
-    window centre), and
+    1. Cycles: upward zero crossings of a zero-phase low-passed copy of the
+       signal (Butterworth, cut-off 3x the dominant frequency, median removed);
+       a crossing counts only after the signal went below minus three noise
+       rms, so sensor noise cannot create false cycles.  The record is cut into
+       consecutive windows of ``cycles`` cycles.
+    2. Amplitude per window: the *raw* samples of the window are fitted by
+       least squares with a locally damped sinusoid plus offset,
+       ``exp(-s tau) (a cos w tau + b sin w tau) + c`` (tau from the window
+       centre t_k); A_k = sqrt(a^2 + b^2) is the envelope at t_k.  Every sample
+       of the cycle contributes (a peak picked from single samples would carry
+       the full sensor noise), the offset c absorbs the sensor's zero, and the
+       frequency comes with it.
+    3. Per consecutive pair: delta = (ln(A_k / A_{k+1}) / (t_{k+1} - t_k)) * T,
+       T = 2 pi / w the local damped period -- the classical
+       ln(x_n / x_{n+1}) per cycle, on fitted instead of sampled peaks.
 
-        delta = 2 pi s / w,   amplitude = sqrt(a^2 + b^2)  (at the window centre).
-
-    Using every sample of the cycle instead of a single peak sample makes the
-    estimate robust to sensor noise, the offset c absorbs the sensor's zero,
-    and for an exactly linear viscous decay the model is exact, so the result
-    is 2 pi beta / sqrt(1 - beta^2) to solver precision.  For a decay with a
-    nonlinear damper (impacts), delta is the equivalent per-cycle decrement at
-    that amplitude, as read from peaks in the paper, and ``rms_residual``
-    shows how far the cycle departs from a damped sinusoid.
-
-    Windows whose amplitude is below ``min_amplitude`` are dropped (the paper
-    plots no points below 1 cm double amplitude).
+    For an exactly linear viscous decay every step is exact, so delta =
+    2 pi beta / sqrt(1 - beta^2) to solver precision.  With a nonlinear damper
+    (impacts) delta is the equivalent per-cycle decrement at that amplitude,
+    as read from peaks in the paper.  Pairs whose amplitude is below
+    ``min_amplitude`` are dropped (the paper plots no points below 1 cm
+    double amplitude).
     """
     t, x = _series(t, x)
     if cycles < 1:
@@ -231,29 +238,31 @@ def log_decrement(t: Sequence[float], x: Sequence[float], *, cycles: int = 1,
         noise = float(np.std(y - ys))
         y = ys
     z = upward_crossings(t, y, hysteresis=3.0 * noise)
-    if z.size < cycles + 1:
-        raise ValueError(f"found {max(z.size - 1, 0)} full cycles, need at least {cycles}")
-    rows = []
+    if z.size < 2 * cycles + 1:
+        raise ValueError(f"found {max(z.size - 1, 0)} full cycles, need at least {2 * cycles} "
+                         f"(two windows of {cycles})")
+    win = []
     for k in range(0, z.size - cycles, cycles):
         lo, hi = z[k], z[k + cycles]
         sel = (t >= lo) & (t <= hi)
         if np.count_nonzero(sel) < 6:
             raise ValueError("fewer than 6 samples per window: sampling too slow for this signal")
         tc = 0.5 * (lo + hi)
-        tau = t[sel] - tc
         omega0 = 2.0 * math.pi * cycles / (hi - lo)
-        (s, w, a, b, _c), rms = _fit_damped_sine(tau, x[sel], omega0)
-        amp = math.hypot(a, b)
-        if min_amplitude is not None and amp < min_amplitude:
-            continue
-        rows.append((tc, amp, 2.0 * math.pi * s / w, w / (2.0 * math.pi), rms))
-    if not rows:
-        raise ValueError("no window above min_amplitude")
-    arr = np.array(rows)
-    delta = arr[:, 2]
-    return LogDecrement(t=arr[:, 0], amplitude=arr[:, 1], delta=delta, frequency=arr[:, 3],
-                        rms_residual=arr[:, 4], cycles=cycles, mean=float(np.mean(delta)),
-                        std=float(np.std(delta, ddof=1)) if delta.size > 1 else 0.0)
+        (_s, w, a, b, _c), rms = _fit_damped_sine(t[sel] - tc, x[sel], omega0)
+        win.append((tc, math.hypot(a, b), w, rms))
+    wt, wa, ww, wr = (np.array(col) for col in zip(*win))
+    amp = np.sqrt(wa[:-1] * wa[1:])
+    omega = 0.5 * (ww[:-1] + ww[1:])
+    delta = np.log(wa[:-1] / wa[1:]) / np.diff(wt) * (2.0 * math.pi / omega)
+    keep = np.ones(delta.size, dtype=bool) if min_amplitude is None else amp >= min_amplitude
+    if not np.any(keep):
+        raise ValueError("no cycle above min_amplitude")
+    d = delta[keep]
+    return LogDecrement(t=(0.5 * (wt[:-1] + wt[1:]))[keep], amplitude=amp[keep], delta=d,
+                        frequency=(omega / (2.0 * math.pi))[keep], mean=float(np.mean(d)),
+                        std=float(np.std(d, ddof=1)) if d.size > 1 else 0.0, cycles=cycles,
+                        window_t=wt, window_amplitude=wa, window_rms_residual=wr)
 
 
 # ----------------------------------------------------------------------------
@@ -337,8 +346,9 @@ def half_power(r: Sequence[float], amplitude: Sequence[float], *, method: str = 
        in A between the pair);
     4. beta = (r2 - r1) / (2 r_peak).
 
-    Resolution check.  The band is *resolved* when at least one sample lies at
-    or above the half-power level and the samples bracketing both half-power
+    Resolution check.  The band is *resolved* when (local method) the peak
+    quadratic has its minimum between its samples, at least one sample lies at
+    or above the half-power level, and the samples bracketing both half-power
     points have at least ``min_bracket_ratio`` of the peak amplitude (for an
     SDOF curve, ratio 0.3 means a sample within about 3.2 beta of the peak).
     Otherwise the half-power points lie in a grid interval much wider than the
@@ -430,14 +440,18 @@ def half_power(r: Sequence[float], amplitude: Sequence[float], *, method: str = 
             f"(r = {r[k - 1]:g}, {r[k]:g}, {r[k + 1]:g}) has no minimum between them; the peak is sharper "
             f"than the grid step {step:.3g} (or the curve is too noisy); refine the sweep near the peak")
     if strict and not resolved:
+        if amp[k] < level:
+            why = (f"no sample reaches the half-power level (the highest is at {amp[k] / a_peak:.3f} of "
+                   f"the interpolated peak): the whole band lies between two samples")
+        else:
+            why = (f"the first sample below the half-power level is at {bracket:.3f} of the peak "
+                   f"(needs >= {min_bracket_ratio:g})")
         raise UnresolvedPeakError(
             f"the frequency grid does not resolve the half-power band: grid step near the peak "
-            f"{step:.3g} vs estimated half-power bandwidth {bw:.3g} ({step_over_bw:.1f}x); "
-            f"the first sample below the half-power level is at {bracket:.3f} of the peak "
-            f"(needs >= {min_bracket_ratio:g}); the half-power points are then set by the interpolant, "
-            f"not by data. Sample the peak with a step <= about half the bandwidth "
-            f"(~{0.5 * bw:.2g} here), or pass strict=False to get the unresolved estimate "
-            f"(beta = {beta:.3g})")
+            f"{step:.3g} vs estimated half-power bandwidth {bw:.3g} ({step_over_bw:.1f}x); {why}; "
+            f"the half-power points are then set by the interpolant, not by data. Sample the peak "
+            f"with a step <= about half the bandwidth (~{0.5 * bw:.2g} here), or pass strict=False "
+            f"to get the unresolved estimate (beta = {beta:.3g})")
     return HalfPower(beta=float(beta), r_peak=float(r_peak), amplitude_peak=float(a_peak), r1=r1, r2=r2,
                      bracket_ratio=bracket, step_over_bandwidth=step_over_bw, samples_in_band=in_band,
                      resolved=resolved, method=method)

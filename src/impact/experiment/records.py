@@ -340,7 +340,7 @@ def _validate_columns(header: Mapping[str, Any], names: list[str],
         if bad.size:
             i = int(bad[0]) + 1
             raise RecordError(f"{_where(i + 1, line_of(i))}: t_s is not increasing "
-                              f"({t[i]!r} after {t[i - 1]!r})")
+                              f"({float(t[i])!r} after {float(t[i - 1])!r})")
         fs = header["sample_rate_hz"]
         step = 1.0 / fs
         med = float(np.median(dt))
@@ -350,20 +350,20 @@ def _validate_columns(header: Mapping[str, Any], names: list[str],
         gaps = np.flatnonzero(dt > GAP_FACTOR * step)
         if gaps.size:
             i = int(gaps[0]) + 1
-            raise RecordError(f"{_where(i + 1, line_of(i))}: gap in t_s ({dt[i - 1]!r} s after "
-                              f"{t[i - 1]!r}, sample step {step!r} s)")
+            raise RecordError(f"{_where(i + 1, line_of(i))}: gap in t_s ({float(dt[i - 1])!r} s after "
+                              f"{float(t[i - 1])!r}, sample step {step!r} s)")
     else:
         if n < 1:
             raise RecordError("drop test has no rows")
         hd, hr = cols["drop_height_cm"], cols["rebound_height_cm"]
         for i in range(n):
             if hd[i] <= 0.0:
-                raise RecordError(f"{_where(i + 1, line_of(i))}: drop_height_cm must be > 0, got {hd[i]!r}")
+                raise RecordError(f"{_where(i + 1, line_of(i))}: drop_height_cm must be > 0, got {float(hd[i])!r}")
             if hr[i] < 0.0:
-                raise RecordError(f"{_where(i + 1, line_of(i))}: rebound_height_cm must be >= 0, got {hr[i]!r}")
+                raise RecordError(f"{_where(i + 1, line_of(i))}: rebound_height_cm must be >= 0, got {float(hr[i])!r}")
             if hr[i] > hd[i]:
-                raise RecordError(f"{_where(i + 1, line_of(i))}: rebound_height_cm ({hr[i]!r}) exceeds "
-                                  f"drop_height_cm ({hd[i]!r})")
+                raise RecordError(f"{_where(i + 1, line_of(i))}: rebound_height_cm ({float(hr[i])!r}) exceeds "
+                                  f"drop_height_cm ({float(hd[i])!r})")
     for arr in cols.values():
         arr.flags.writeable = False
     return cols
