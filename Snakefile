@@ -22,6 +22,7 @@ include: "workflow/rules/sweeps.smk"
 include: "workflow/rules/tmd.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/tables.smk"
+include: "workflow/rules/masri.smk"
 
 
 rule all:
@@ -29,3 +30,4 @@ rule all:
     input:
         figures=expand("results/figures/{fig}.{ext}", fig=FIGURES, ext=("png", "pdf")),
         table="results/tables/paper_vs_reproduced.csv",
+        masri=MASRI_OUTPUTS,

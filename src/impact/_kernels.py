@@ -532,6 +532,9 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
         mode = MODE_LOCKED
     escape = 0
     escape_v = 0
+    if mode == MODE_FREE and side != 0 and abs(z[2] - z[0]) >= half * (1.0 - 1e-12) and d > 0.0:
+        # a state just after an impact on wall `side` (e.g. a closed-form orbit)
+        escape = side
     if fric is not None:
         if mode == MODE_FREE and z[3] == z[1]:
             mode = MODE_FLOOR

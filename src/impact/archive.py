@@ -250,9 +250,11 @@ def _collect(root: Path, include: Iterable) -> dict[str, Path]:
         for f in found:
             try:
                 rel = f.resolve().relative_to(root)
-            except ValueError:
-                raise ValueError(f"{f}: outside the archive root {root}") from None
+            except ValueError:  # e.g. a --configfile kept elsewhere
+                rel = PurePosixPath("external", f.name)
             name = rel.as_posix()
+            if name in files and files[name].resolve() != f.resolve():
+                raise ValueError(f"{name}: two different files would have this path in the archive")
             if name in GENERATED:
                 raise ValueError(f"{name}: the archive writes this file itself")
             if any(part.startswith(".") and part.endswith(".tmp") for part in rel.parts):
@@ -371,7 +373,8 @@ def check_archive(path) -> list[tuple[str, str]]:
             members = tar.getmembers()
         except (OSError, tarfile.TarError, EOFError, zlib.error) as exc:
             return [(str(path), f"archive is damaged: {exc}")]
-        manifests = [m for m in members if PurePosixPath(m.name).name == MANIFEST and len(PurePosixPath(m.name).parts) <= 2]
+        manifests = [m for m in members
+                     if PurePosixPath(m.name).name == MANIFEST and len(PurePosixPath(m.name).parts) <= 2]
         if len(manifests) != 1:
             return [(MANIFEST, "missing from the archive" if not manifests else "more than one in the archive")]
         mman = manifests[0]
@@ -386,9 +389,12 @@ def check_archive(path) -> list[tuple[str, str]]:
             manifest_bytes = read(mman)
             manifest = json.loads(manifest_bytes)
             listed = {e["path"]: e for e in manifest["files"]}
+            repeated = len(manifest["files"]) - len(listed)
         except (ValueError, KeyError, TypeError, OSError, tarfile.TarError, EOFError, zlib.error) as exc:
             return [(MANIFEST, f"unreadable: {exc}")]
 
+        if repeated:
+            problems.append((MANIFEST, f"lists {repeated} path(s) more than once"))
         by_name: dict[str, list[tarfile.TarInfo]] = {}
         for m in members:
             if m.isdir():
@@ -506,8 +512,15 @@ def verify_main(argv=None) -> int:
 
 
 def snakemake_main(smk) -> Path:
-    """Body of the ``archive`` rule's script: every input is archived, relative to the workflow folder."""
-    include = [p for p in smk.input]
+    """Body of the ``archive`` rule's script: every named input but ``library`` is archived,
+    by its path relative to the workflow's folder; params.citation (optional) sets CITATION.cff keys."""
+    inp = smk.input
+    include = []
+    for key in inp.keys():
+        if key == "library":
+            continue
+        value = getattr(inp, key)
+        include.extend([value] if isinstance(value, str) else list(value))
     root = Path(getattr(smk.params, "root", ".") or ".")
     citation = dict(getattr(smk.params, "citation", {}) or {})
     return build_archive(smk.output[0], root, include, smk.config, citation)

@@ -261,7 +261,14 @@ def _jacobian(c, root) -> np.ndarray:
 
 def _stability(c, root, admissible) -> dict:
     """Eigenvalues of J; stable iff admissible and all |lambda| < 1 (section 6.1)."""
-    J = _jacobian(c, root)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        J = _jacobian(c, root)
+    if not np.all(np.isfinite(J)):
+        # a grazing impact (u + v_- = 0): the next impact time is not
+        # differentiable and |lambda| -> infinity (section 6.3)
+        inf = [math.inf] * 4
+        return dict(jacobian=J.tolist(), eigenvalues=[complex(math.inf)] * 4, eigenvalue_moduli=inf,
+                    max_modulus=math.inf, stable=False)
     lam = np.linalg.eigvals(J)
     lam = lam[np.argsort(-np.abs(lam))]
     moduli = np.abs(lam)

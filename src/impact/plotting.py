@@ -92,3 +92,53 @@ def save_atomic(fig, path) -> None:
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+CHART_COLORS = ["#f0f0f0", "#c8c8c8", "#f4a582", "#4393c3"]
+CHART_LABELS = ["no 2-EIPC root", "roots, none admissible", "admissible, unstable", "admissible, stable"]
+
+
+def plot_stability_chart(ds, outputs) -> None:
+    """Masri's 2-EIPC existence and stability in the (r, d/(F0/K)) plane, one panel per e."""
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    n = ds.sizes["e"]
+    fig, axes = plt.subplots(1, n, figsize=(4.6 * n, 4.2), squeeze=False, sharey=True)
+    for ax, e in zip(axes.flat, ds["e"].values):
+        cls = ds["class"].sel(e=e).values
+        ax.pcolormesh(ds["r"].values, ds["d_over_xst"].values, cls, cmap=ListedColormap(CHART_COLORS),
+                      vmin=-0.5, vmax=3.5, shading="nearest")
+        ax.set_title(f"μ={ds.attrs['mu']:g}, e={e:g}, β={ds.attrs['beta']:g}")
+        ax.set_xlabel("frequency ratio r")
+    axes.flat[0].set_ylabel("total clearance d / (F0/K)")
+    handles = [Patch(color=c, label=lab) for c, lab in zip(CHART_COLORS, CHART_LABELS)]
+    fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
+    for out in outputs:
+        save_atomic(fig, out)
+    plt.close(fig)
+
+
+def plot_branches(ds, outputs) -> None:
+    """Closed-form 2-EIPC branches (stable solid, unstable dashed) and runs from rest."""
+    fig, ax = plt.subplots(figsize=(7.0, 4.6))
+    r = ds["r"].values
+    for name, color in zip(ds["root"].values, ("C0", "C3")):
+        amp = ds["closed_form"].sel(root=name).values
+        stable = ds["stable"].sel(root=name).values.astype(bool)
+        ax.plot(r, np.where(stable, amp, np.nan), "-", color=color, lw=1.6, label=f"closed form, {name} root, stable")
+        ax.plot(r, np.where(~stable, amp, np.nan), "--", color=color, lw=1.0, label=f"closed form, {name} root, unstable")
+    for start, marker in zip(ds["start"].values, ("o", "x", "+")):
+        ax.plot(r, ds["simulated"].sel(start=start).values, marker, ms=4, color="k", mfc="none",
+                linestyle="none", label=f"simulation from rest, start {start}")
+    ax.set_xlabel("frequency ratio r")
+    ax.set_ylabel("√2·RMS amplitude / (F0/K)")
+    ax.set_title(f"CID μ={ds.attrs['mu']:g}, e={ds.attrs['e']:g}, g={ds.attrs['gap_ratio']:g}: "
+                 "closed form (Masri) and simulation")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    for out in outputs:
+        save_atomic(fig, out)
+    plt.close(fig)

@@ -28,10 +28,8 @@ import base64
 import csv
 import hashlib
 import html
-import io
 import json
 import logging
-import math
 import re
 import struct
 from collections.abc import Iterable, Mapping
@@ -58,8 +56,8 @@ m = &#956;M moves freely (CID) or as a linearised pendulum tuned to r&#8242; = &
 (PID) inside a clearance d. Impacts are instantaneous, conserve momentum and reverse the relative
 velocity with the coefficient of restitution e. Between impacts the motion is linear, so the
 simulator advances it in closed form and locates every impact to round-off.</p>
-<p><strong>Protocol.</strong> Each run starts from rest and lasts 500 natural periods; the amplitude
-is &#8730;2 times the RMS of the displacement over the second half. A frequency sweep
+<p><strong>Protocol.</strong> In the paper each run starts from rest and lasts 500 natural periods;
+the amplitude is &#8730;2 times the RMS of the displacement over the second half. A frequency sweep
 r = &#937;/&#969; around resonance gives the largest amplitude x<sub>max</sub>, reported as the
 amplitude ratio X<sub>m</sub> = x<sub>max</sub>/A<sub>max</sub> against the gap ratio
 g = d/A<sub>max</sub>, where A<sub>max</sub> is the bare structure's resonant amplitude. The impacts
@@ -255,19 +253,22 @@ def figure_caption(name: str) -> str:
 
 
 def standard_sections(results, figures: Iterable | None = None, captions: Mapping | None = None,
-                      overview: bool = True, extra: Mapping | None = None) -> list[dict]:
+                      overview: bool = True, extra: Mapping | None = None, config: Mapping | None = None
+                      ) -> list[dict]:
     """The study's sections, in order, for the result files under ``results`` that exist.
 
     figures: PNG paths (default: results/figures/*.png, numerics figure excluded); captions:
     caption per section id, over the defaults; extra: {id: path} for any standard table or
-    figure kept elsewhere than its standard place.
+    figure kept elsewhere than its standard place; config: the run's configuration, summarised
+    in the overview (so the protocol stated is this run's, not a copy of it).
     """
     results = Path(results)
     captions = dict(captions or {})
     extra = {k: Path(v) for k, v in (extra or {}).items()}
     sections: list[dict] = []
     if overview:
-        sections.append({"id": "overview", "title": "The study", "kind": "text", "html": OVERVIEW_HTML})
+        sections.append({"id": "overview", "title": "The study", "kind": "text",
+                         "html": OVERVIEW_HTML + (run_summary_html(config) if config else "")})
 
     def table(sid):
         rel, title = STANDARD_TABLES[sid]
@@ -304,6 +305,48 @@ def standard_sections(results, figures: Iterable | None = None, captions: Mappin
     return sections
 
 
+def _num(x) -> str:
+    return _e(format(x, "g")) if isinstance(x, (int, float)) and not isinstance(x, bool) else _e(x)
+
+
+def _grid(g) -> str:
+    if isinstance(g, Mapping) and {"min", "max", "step"} <= set(g):
+        return f"{_num(g['min'])} to {_num(g['max'])} in steps of {_num(g['step'])}"
+    if isinstance(g, (list, tuple)):
+        return ", ".join(_num(x) for x in g)
+    return _num(g)
+
+
+def run_summary_html(config: Mapping) -> str:
+    """The protocol of this run, read from its configuration (HTML, every value escaped)."""
+    bits = []
+    proto = config.get("protocol") or {}
+    if "periods" in proto:
+        text = f"{_num(proto['periods'])} natural periods per run"
+        if "average_from" in proto:
+            text += f", amplitude measured from period {_num(proto['average_from'])} on"
+        bits.append(text)
+    if "freq" in proto:
+        bits.append(f"r = {_grid(proto['freq'])}")
+    if "gap" in proto:
+        bits.append(f"g = {_grid(proto['gap'])}")
+    starts = proto.get("starts")
+    if isinstance(starts, Mapping):
+        bits.append("starts of the damper mass: " + "; ".join(
+            f"{_e(str(k).upper())} {_grid(v)}" for k, v in starts.items()))
+    struct_ = config.get("structure") or {}
+    if "beta" in struct_:
+        bits.append(f"&#946; = {_num(struct_['beta'])}")
+    if "force_ratio" in struct_:
+        bits.append(f"F<sub>0</sub>/K = {_num(struct_['force_ratio'])}")
+    figures = config.get("figures")
+    if isinstance(figures, Mapping) and figures:
+        bits.append("figures " + ", ".join(_e(f) for f in figures))
+    if not bits:
+        return ""
+    return f'<p id="this-run"><strong>This run</strong> (from its configuration): {"; ".join(bits)}.</p>'
+
+
 def _figure_title(name: str) -> str:
     m = _FIG_NUMBER.match(name)
     if m:
@@ -325,6 +368,7 @@ th,td{border:1px solid #ccc;padding:.2rem .45rem;text-align:left;vertical-align:
 th{background:#f0f0f0}td.num{text-align:right;font-variant-numeric:tabular-nums}
 tr.miss td{background:#fde2e1}tr.miss td:first-child{border-left:4px solid #c0392b}
 .summary{font-weight:bold}.caption{font-size:.92rem;color:#333}
+.comparison{border-left:4px solid #888;padding-left:.5rem;font-size:.92rem}
 figure{margin:.6rem 0}figure img{max-width:100%;height:auto;border:1px solid #ddd}
 code{font-size:.85rem;word-break:break-all}.dirty{color:#c0392b;font-weight:bold}
 .muted{color:#666;font-size:.85rem}
@@ -595,7 +639,7 @@ def render_report(sections, provenance: Mapping | None, title: str = "Impact dam
             extra = figure_comparison(Path(path).stem, *comparison) if comparison else ""
             body.append(f'<figure><img src="{uri}" alt="{_e(stitle)}"{wh}>'
                         f"<figcaption>{_paragraphs(cap, 'caption')}"
-                        + (f'<p class="summary">{_e(extra)}</p>' if extra else "")
+                        + (f'<p class="comparison">{_e(extra)}</p>' if extra else "")
                         + f'<p class="muted">From <code>{_e(_display_path(path))}</code>.</p>'
                         "</figcaption></figure>")
         parts.append(f'<section id="{_e(sid)}"><h2>{_e(stitle)}</h2>{"".join(body)}</section>')
@@ -667,7 +711,7 @@ def snakemake_main(smk) -> Path:
         if files:
             extra[sid] = files[0]
     results = Path(smk.output[0]).parent.parent
-    sections = standard_sections(results, figures=figures, extra=extra)
+    sections = standard_sections(results, figures=figures, extra=extra, config=smk.config)
     # only what the rule declares: standard files not wired as inputs stay out
     declared = {str(Path(p)) for p in figures} | {str(Path(p)) for p in extra.values()}
     sections = [s for s in sections if s["kind"] == "text" or str(Path(s["path"])) in declared]
@@ -675,6 +719,11 @@ def snakemake_main(smk) -> Path:
     if not bench:
         bench_dir = getattr(smk.params, "benchmarks", None) if hasattr(smk, "params") else None
         bench = find_benchmarks(bench_dir or results / "benchmarks")
-    executor = getattr(smk.params, "executor", "unknown") if hasattr(smk, "params") else "unknown"
+    executor = "unknown"
+    for where in ("resources", "params"):  # the rule passes it as a resource (no rerun when it changes)
+        value = getattr(getattr(smk, where, None), "executor", None)
+        if isinstance(value, str) and value:
+            executor = value
+            break
     prov = collect_provenance(smk.config, executor=executor, benchmarks=bench)
     return build_report(smk.output[0], sections, prov)

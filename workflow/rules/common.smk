@@ -25,6 +25,19 @@ LIB_PLOT = library("plotting.py", "study.py", "pipeline.py")
 LIB_TABLE = library("comparison.py", "study.py", "pipeline.py")
 
 
+# stages that run only when configured
+MASRI_OUTPUTS = (
+    [
+        "results/tables/masri_check.csv",
+        "results/checks/masri_summary.json",
+        "results/figures/masri_stability.png",
+        "results/figures/masri_branches.png",
+    ]
+    if "masri" in config
+    else []
+)
+
+
 def sweep_file(spec):
     return f"results/sweeps/{curve_id(spec)}.nc"
 

@@ -31,8 +31,10 @@ active else +inf): the minimiser of the convex 1-D problem
 Impacts are not located in time: an impact is reported at the end time of a
 step in which a wall impulse was applied (a jump of u above 1e-10 force_ratio; smaller
 ones are round-off), with pre/post = v at the start/end of
-that step; consecutive impulse steps at the same wall (persistent contact, e.g.
-e = 0) count as one impact.  Positions may penetrate the walls by O(h |u|);
+that step; an impulse step counts as a new impact only if the mass was
+approaching that wall at the start of the step, and consecutive impulse steps at
+the same wall (persistent contact, e.g. e = 0, or a mass pressed against a wall
+by friction) count as one impact.  Positions may penetrate the walls by O(h |u|);
 ``max_penetration`` reports it.  The scheme is first order with impacts (second
 order for theta = 1/2 between impacts).  Amplitude: trapezoid rule on x^2 at the
 step points.  ``nfev`` counts evaluations of the external force (one per step).
@@ -149,7 +151,7 @@ def simulate_moreau_jean(system: System, r: float, t_end: float, t_window: float
         nyd = vfy + P * (i22 - i12)
         nx = x + h * (theta * nxd + th1 * xd)
         ny = y + h * (theta * nyd + th1 * yd)
-        if side != 0 and side != last_side:
+        if side != 0 and side != last_side and side * u_minus > tiny:
             log.add(t1, side, (xd, yd), (nxd, nyd))
         last_side = side
         trapz.add(t, x, t1, nx)

@@ -16,7 +16,8 @@ may pull briefly just before).  Free flight and contact are integrated by
 (delta = 0 upward) and exit (delta = 0 downward); both phases are affine, so the
 implicit methods get the exact constant Jacobian.  Impact time = contact entry,
 pre = velocities at entry, post = velocities at exit (NaN if the run ends in
-contact).  With friction (CID) sliding / sticking is handled as in
+contact); an entry slower than ``v_stick`` (a mass pressed into the wall from
+rest, e.g. by friction) is a contact episode, not an impact.  With friction (CID) sliding / sticking is handled as in
 :mod:`impact.baselines.ivp`, with the spring force included in the force a
 stuck mass needs.  ``max_penetration`` is the largest delta at the solver's step
 points.  Amplitude: Gauss--Legendre quadrature on the dense output, as for ivp.
@@ -29,7 +30,7 @@ import math
 import numpy as np
 
 from . import (
-    ImpactLog, S_VEL, Functional, check_inputs, free_affine, initial_state, leaves_now, make_result,
+    ImpactLog, S_VEL, Functional, check_inputs, default_v_stick, free_affine, initial_state, leaves_now, make_result,
     merged_velocity, stuck_affine, stuck_exit_functionals, wall_gap,
 )
 from .ivp import MAX_IDLE_PHASES, Segments
@@ -50,13 +51,15 @@ def dashpot(system: System, stiffness: float) -> tuple[float, float]:
 
 def simulate_penalty(system: System, r: float, t_end: float, t_window: float, start: str = "centre", *,
                      stiffness: float, method: str = "Radau", rtol: float = 1e-8, atol=None,
-                     max_impacts: int = 10 ** 6):
+                     max_impacts: int = 10 ** 6, v_stick: float | None = None):
     """Compliant-contact baseline (see the module docstring).
 
     stiffness   contact spring k (force per unit penetration, model units M = 1, omega = 1)
     method      solve_ivp method ('Radau' default; 'LSODA', 'BDF', explicit ones work but are slow)
     rtol, atol  solve_ivp tolerances; atol defaults to rtol * force_ratio
     max_impacts cap on contact entries; exceeding it fails the run
+    v_stick     entries slower than this (default 1e-7 * force_ratio; e.g. a mass pushed into
+                the wall by friction from rest) are contact episodes, not impacts
     """
     check_inputs(system, r, t_end, t_window, start)
     k = float(stiffness)
@@ -66,6 +69,8 @@ def simulate_penalty(system: System, r: float, t_end: float, t_window: float, st
         raise ValueError("the penalty method needs a clearance d > 0")
     _, cd = dashpot(system, k)
     seg = Segments(system, r, t_end, t_window, method, rtol, atol)
+    v_stick = default_v_stick(system, v_stick)
+    n_entries = 0
     half = 0.5 * system.gap
     af, ph = system.friction_accel, system.phase
     scale = max(system.force_ratio, 1e-300)
@@ -147,10 +152,12 @@ def simulate_penalty(system: System, r: float, t_end: float, t_window: float, st
         idle = idle + 1 if t - t0 <= 1e-12 * max(1.0, t) else 0
         kind, wside = tags[fired]
         if kind == "enter":
-            if len(log) >= max_impacts:
+            n_entries += 1
+            if n_entries > max_impacts:
                 status = f"failed: more than max_impacts = {max_impacts} impacts by t = {t:.6g}"
                 break
-            open_impact = log.add(t, wside, (z[1], z[3]))
+            if wside * (z[3] - z[1]) > v_stick:
+                open_impact = log.add(t, wside, (z[1], z[3]))
             cside = wside
         elif kind == "exit":
             if open_impact is not None:

@@ -1,0 +1,337 @@
+"""The HTML report: built from a synthetic results tree, checked as HTML and in headless Chromium."""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import html
+import json
+import os
+import re
+import shutil
+import subprocess
+from html.parser import HTMLParser
+from pathlib import Path
+
+import pytest
+
+from impact import report
+
+ROOT = Path(__file__).resolve().parents[1]
+CHROMIUM = shutil.which("chromium") or ("/usr/bin/chromium" if os.access("/usr/bin/chromium", os.X_OK) else None)
+CONFIG = {"structure": {"beta": 0.0048, "force_ratio": 0.096},
+          "protocol": {"periods": 40, "average_from": 20, "freq": {"min": 0.96, "max": 1.04, "step": 0.04},
+                       "gap": {"min": 0.6, "max": 1.8, "step": 0.6}, "starts": {"cid": ["centre", "left"]}},
+          "figures": {"fig08": {}, "fig99": {}}}
+
+PVR_ROWS = [
+    # figure, case, quantity, start, paper, reproduced, rel_difference, within_10pct, g_optimum, reason
+    ["8(a), 9(a)", "CID mu=0.01 e=0.25", "X_m at optimum g", "centre", "0.32", "0.4353203017068163",
+     "0.36037594283380087", "False", "1.4", "initial condition matters: start 'left' gives 0.314 <&>"],
+    ["8(a), 9(a)", "CID mu=0.01 e=0.25", "X_m at optimum g", "left", "0.32", "0.31393093404727745",
+     "-0.018965831102257975", "True", "1.6", ""],
+    ["9(b-d)", "PID mu=0.01 r'=0.5, e=0.25/0.45/0.65", "X_m at optimum rises with e", "centre", "yes", "yes",
+     "", "True", "", ""],
+    ["11", "TMD mu=0.01 beta=0.0048", "optimum f", "-", "0.99", "0.9894015886850624",
+     "-0.0006044558736742842", "True", "", ""],
+    ["11", "efficiency order", "TMD > CID > PID", "centre", "yes", "no (X_m TMD 0.122, CID 0.435)", "",
+     "False", "", "order differs for this start"],
+]
+PVR_COLUMNS = ["figure", "case", "quantity", "start", "paper", "reproduced", "rel_difference", "within_10pct",
+               "g_optimum", "reason"]
+
+
+def _png(path: Path, title: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(3, 2))
+    ax.plot([0, 1, 2], [1.0, 0.4, 0.6], "o-")
+    ax.set_title(title)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=60)
+    plt.close(fig)
+
+
+def _csv(path: Path, columns, rows) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(columns)
+        w.writerows(rows)
+
+
+@pytest.fixture
+def results(tmp_path) -> Path:
+    res = tmp_path / "results"
+    _png(res / "figures" / "fig08.png", "fig08")
+    _png(res / "figures" / "fig99.png", "fig99")
+    _png(res / "figures" / "numerics_error_runtime.png", "numerics")
+    _csv(res / "tables" / "paper_vs_reproduced.csv", PVR_COLUMNS, PVR_ROWS)
+    _csv(res / "tables" / "masri_check.csv", ["mu", "e", "r", "ours", "masri", "agrees"],
+         [["0.01", "0.5", "1.0", "0.4012", "0.4011", "True"], ["0.01", "0.5", "1.05", "0.52", "0.61", "False"],
+          ["0.03", "0.5", "1.0", "0.3", "0.3", "True"]])
+    (res / "tables" / "tmd_optimum.json").write_text(json.dumps(
+        {"f": 0.9894, "beta_t": 0.0617, "X_m": 0.1218, "den_hartog": {"f": 0.990099, "beta_t": 0.06033}}))
+    bench = res / "benchmarks"
+    (bench / "figure").mkdir(parents=True)
+    (bench / "sweep_curve").mkdir(parents=True)
+    header = "s\th:m:s\tmax_rss\tmax_vms\tmax_uss\tmax_pss\tio_in\tio_out\tmean_load\tcpu_time\n"
+    (bench / "figure" / "fig08.tsv").write_text(header + "3.15\t0:00:03\t208\t454\t141\t174\t0\t0.2\t79\t3.0\n")
+    (bench / "sweep_curve" / "cid_mu0.01_e0.25.tsv").write_text(
+        header + "10.0\t0:00:10\t1\t1\t1\t1\t0\t0\t1\t1\n" + "12.0\t0:00:12\t1\t1\t1\t1\t0\t0\t1\t1\n")
+    (bench / "tmd_optimum.tsv").write_text(header + "0.50\t0:00:00\t1\t1\t1\t1\t0\t0\t1\t1\n")
+    return res
+
+
+def _build(results: Path, **kw) -> tuple[Path, str, dict]:
+    sections = report.standard_sections(results, config=CONFIG)
+    prov = report.collect_provenance(CONFIG, executor="local-test", benchmarks=results / "benchmarks")
+    out = report.build_report(results / "report" / "index.html", sections, prov)
+    return out, out.read_text(encoding="ascii"), prov
+
+
+class _Checker(HTMLParser):
+    """Well-formedness beyond what browsers forgive: balanced tags, unique ids, resolvable anchors."""
+
+    VOID = {"area", "base", "br", "col", "embed", "hr", "img", "input", "link", "meta", "source", "track", "wbr"}
+
+    def __init__(self):
+        super().__init__(convert_charrefs=True)
+        self.stack, self.errors, self.ids, self.links, self.resources = [], [], [], [], []
+        self.doctype = None
+        self.imgs = []
+        self.text = []
+
+    def handle_decl(self, decl):
+        self.doctype = decl
+
+    def handle_starttag(self, tag, attrs):
+        names = [k for k, _ in attrs]
+        if len(names) != len(set(names)):
+            self.errors.append(f"duplicate attribute in <{tag}>")
+        a = dict(attrs)
+        if "id" in a:
+            self.ids.append(a["id"])
+        if tag == "a" and "href" in a:
+            self.links.append(a["href"])
+        for key in ("src", "href", "srcset", "poster", "data"):
+            if key in a and not (tag == "a" and key == "href"):
+                self.resources.append(a[key])
+        if tag == "img":
+            self.imgs.append(a)
+        if tag in {"script", "iframe", "object", "embed", "base"}:
+            self.errors.append(f"<{tag}> in a report that needs none")
+        if tag not in self.VOID:
+            self.stack.append(tag)
+
+    def handle_startendtag(self, tag, attrs):
+        self.handle_starttag(tag, attrs)
+        if tag not in self.VOID:
+            self.stack.pop()
+
+    def handle_endtag(self, tag):
+        if tag in self.VOID:
+            self.errors.append(f"end tag for void <{tag}>")
+        elif not self.stack or self.stack[-1] != tag:
+            self.errors.append(f"</{tag}> closes <{self.stack[-1] if self.stack else None}>")
+        else:
+            self.stack.pop()
+
+    def handle_data(self, data):
+        self.text.append(data)
+
+
+def _check(page: str) -> _Checker:
+    c = _Checker()
+    c.feed(page)
+    c.close()
+    return c
+
+
+def test_report_shows_every_given_section_from_the_files(results):
+    out, page, prov = _build(results)
+    assert out == results / "report" / "index.html"
+    ids = re.findall(r'<section id="([^"]+)"', page)
+    assert ids == ["overview", "paper_vs_reproduced", "fig08", "fig99", "tmd_optimum", "masri_check",
+                   "numerics_error_runtime", "provenance"]
+    # files that do not exist give no section
+    assert 'id="cross_validation"' not in page and 'id="numerics_stability"' not in page
+    # the comparison: rows not within 10 % are highlighted, with their reason (escaped)
+    assert page.count('<tr class="miss">') == 2
+    assert "initial condition matters: start &#x27;left&#x27; gives 0.314 &lt;&amp;&gt;" in page
+    assert "order differs for this start" in page
+    assert "3 of 5 comparisons agree with the paper within 10 %" in page
+    # every number of the file is in the page: shown rounded, exact in the tooltip
+    assert 'title="0.4353203017068163">0.4353</td>' in page
+    # figures: embedded PNGs, default caption for fig08 (the paper's values), generic for fig99
+    assert page.count('src="data:image/png;base64,') == 3
+    assert "The paper reads X_m = 0.32 at the optimum gap" in page
+    assert html.escape(report.GENERIC_FIGURE_CAPTION.format(name="fig99")) in page
+    assert "Against the paper: 1 of 2 of this figure&#x27;s reported values agree" in page
+    # closed-form check: rendered with a summary line computed from the table
+    assert "3 rows; agrees: 2 of 3 true" in page
+    # the overview states this run's protocol, from the configuration
+    assert "40 natural periods per run, amplitude measured from period 20 on" in page
+
+
+def test_provenance_section(results):
+    _, page, prov = _build(results)
+    canonical = json.dumps(CONFIG, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
+    assert prov["config_sha256"] == hashlib.sha256(canonical.encode()).hexdigest()
+    assert prov["config_sha256"] in page
+    assert prov["git_commit"] in page and prov["git_dirty"] in ("yes", "no", "unknown")
+    assert "local-test" in page
+    for name, version in prov["packages"].items():
+        assert f"<td>{name}</td><td>{version}</td>" in page
+    bench = {(b["rule"], b["job"]): b for b in prov["benchmarks"]}
+    assert set(bench) == {("figure", "fig08"), ("sweep_curve", "cid_mu0.01_e0.25"), ("tmd_optimum", "")}
+    assert bench[("sweep_curve", "cid_mu0.01_e0.25")]["s"] == pytest.approx(11.0)  # mean of the repeats
+    assert bench[("sweep_curve", "cid_mu0.01_e0.25")]["repeats"] == 2
+    assert "3 jobs, 14.7 s of wall time in total" in page
+    assert '<tr><td>figure</td><td class="num">1</td><td class="num">3.15</td>' in page
+
+
+def test_report_is_valid_self_contained_html(results):
+    out, page, _ = _build(results)
+    assert page.isascii()  # non-ASCII characters as references: no encoding can garble it
+    c = _check(page)
+    assert c.doctype == "DOCTYPE html"
+    assert not c.errors, c.errors
+    assert not c.stack, f"unclosed: {c.stack}"
+    assert len(c.ids) == len(set(c.ids)), "duplicate ids"
+    assert all(h.startswith("#") and h[1:] in c.ids for h in c.links), c.links
+    # nothing to fetch: every resource is inline
+    assert c.resources and all(r.startswith("data:") for r in c.resources), c.resources
+    assert not re.search(r"(?i)(https?:)?//[a-z0-9.-]+\.[a-z]{2,}/", page.replace("citation-file-format", ""))
+    assert "@import" not in page and "url(" not in page
+    for img in c.imgs:
+        assert img.get("alt") and int(img["width"]) > 0 and int(img["height"]) > 0
+    # written atomically: no temporary file left beside it
+    assert sorted(p.name for p in out.parent.iterdir()) == ["index.html"]
+
+
+def test_sections_as_a_dict_and_only_when_given(tmp_path, results):
+    sections = {
+        "intro": {"title": "Intro", "kind": "text", "text": "First <paragraph>.\n\nSecond."},
+        "pvr": {"title": "Table", "kind": "table", "path": str(results / "tables" / "paper_vs_reproduced.csv"),
+                "highlight": {"column": "within_10pct", "equals": "False"}},
+        "gone": {"title": "Missing", "kind": "figure", "path": str(tmp_path / "nope.png")},
+        "fig": {"title": "A figure", "kind": "figure", "path": str(results / "figures" / "fig08.png"),
+                "caption": "My caption."},
+    }
+    out = report.build_report(tmp_path / "r" / "index.html", sections, None)
+    page = out.read_text()
+    assert re.findall(r'<section id="([^"]+)"', page) == ["intro", "pvr", "fig"]
+    assert "<p>First &lt;paragraph&gt;.</p><p>Second.</p>" in page
+    assert "My caption." in page and "provenance" not in page
+    with pytest.raises(ValueError, match="kind"):
+        report.build_report(tmp_path / "x.html", [{"id": "a", "kind": "movie"}], None)
+    assert not (tmp_path / "x.html").exists()
+
+
+def test_snakemake_captions_exist_for_every_default_caption():
+    folder = ROOT / "workflow" / "report"
+    for name in list(report.CAPTIONS) + ["paper_vs_reproduced", "tmd_optimum", "workflow", "figure"]:
+        assert (folder / f"{name}.rst").stat().st_size > 100, name
+    # the figure rule's caption includes each figure's own file
+    dispatch = (folder / "figure.rst").read_text()
+    for name in report.CAPTIONS:
+        assert f'"{name}"' in dispatch
+
+
+# --------------------------------------------------------------------------- headless Chromium
+
+_SELFTEST = """
+<script>
+(function () {
+  var errors = [];
+  window.addEventListener("error", function (ev) {
+    var t = ev.target;
+    errors.push(t && t !== window ? "resource failed: " + (t.src || t.href || t.tagName) : "error: " + ev.message);
+  }, true);
+  document.addEventListener("securitypolicyviolation", function (ev) {
+    errors.push("blocked external resource: " + ev.blockedURI);
+  });
+  ["error", "warn"].forEach(function (level) {
+    var orig = console[level];
+    console[level] = function () {
+      errors.push(level + ": " + Array.prototype.join.call(arguments, " "));
+      orig.apply(console, arguments);
+    };
+  });
+  window.addEventListener("load", function () {
+    var imgs = Array.prototype.map.call(document.images, function (im) {
+      return {alt: im.alt, complete: im.complete, naturalWidth: im.naturalWidth, naturalHeight: im.naturalHeight};
+    });
+    var out = document.createElement("pre");
+    out.id = "selftest";
+    out.textContent = JSON.stringify({errors: errors, images: imgs, title: document.title,
+                                      sections: document.querySelectorAll("section").length});
+    document.body.appendChild(out);
+  });
+})();
+</script>
+"""
+# a strict policy on the tested copy: anything not inline is blocked and reported
+_CSP = ('<meta http-equiv="Content-Security-Policy" content="default-src \'none\'; img-src data:; '
+        'style-src \'unsafe-inline\'; script-src \'unsafe-inline\'">')
+
+
+def _chromium(args, user_dir: Path) -> subprocess.CompletedProcess:
+    cmd = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+           "--disable-background-networking", "--disable-component-update", "--disable-sync",
+           "--disable-dev-shm-usage", f"--user-data-dir={user_dir}", "--enable-logging=stderr", "--v=0",
+           "--virtual-time-budget=5000", *args]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=90)
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (apt-get install chromium; `make test` "
+                                             "installs it when run as root)")
+def test_report_loads_in_headless_chromium_without_errors(results, tmp_path):
+    out, page, _ = _build(results)
+    n_figures = page.count('src="data:image/png;base64,')
+    # the report itself carries no script: the self-test goes into a copy
+    probe = tmp_path / "probe.html"
+    probe.write_text(page.replace("<head>\n", "<head>\n" + _CSP + "\n", 1)
+                     .replace("</body>", _SELFTEST + "</body>", 1), encoding="ascii")
+    proc = _chromium(["--dump-dom", probe.as_uri()], tmp_path / "chromium-profile-1")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    m = re.search(r'<pre id="selftest">(.*?)</pre>', proc.stdout, re.S)
+    assert m, f"self-test did not run:\n{proc.stdout[-2000:]}\n{proc.stderr[-2000:]}"
+    result = json.loads(html.unescape(m.group(1)))
+    assert result["errors"] == []
+    assert result["title"] == "Impact dampers: the reproduced study"
+    assert result["sections"] == 8
+    assert len(result["images"]) == n_figures == 3
+    for img in result["images"]:
+        assert img["complete"] and img["naturalWidth"] > 0 and img["naturalHeight"] > 0, img
+    # whatever reached the browser's console (none expected: the page has no script of its own)
+    console = [ln for ln in proc.stderr.splitlines() if ":CONSOLE" in ln]
+    assert console == [], console
+
+    # control: the same probe does see a broken image, an external resource and a console error
+    bad = page.replace("</main>", '<img alt="broken" src="data:image/png;base64,AAAA">'
+                       '<img alt="external" src="https://example.invalid/x.png"></main>', 1)
+    bad = bad.replace("<head>\n", "<head>\n" + _CSP + "\n", 1).replace(
+        "</body>", _SELFTEST + "<script>console.error('control');</script></body>", 1)
+    control = tmp_path / "control.html"
+    control.write_text(bad, encoding="ascii")
+    proc = _chromium(["--dump-dom", control.as_uri()], tmp_path / "chromium-profile-3")
+    seen = json.loads(html.unescape(re.search(r'<pre id="selftest">(.*?)</pre>', proc.stdout, re.S).group(1)))
+    assert any("blocked external resource" in e for e in seen["errors"]), seen["errors"]
+    assert any("resource failed" in e for e in seen["errors"]), seen["errors"]
+    assert any("control" in e for e in seen["errors"]), seen["errors"]
+    assert [im["naturalWidth"] for im in seen["images"] if im["alt"] in ("broken", "external")] == [0, 0]
+
+    # the unmodified report, as a reader sees it
+    shot = tmp_path / "report.png"
+    proc = _chromium([f"--screenshot={shot}", "--window-size=1280,2000", "--hide-scrollbars", out.as_uri()],
+                     tmp_path / "chromium-profile-2")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert [ln for ln in proc.stderr.splitlines() if ":CONSOLE" in ln] == []
+    data = shot.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    assert report._png_size(data) == (1280, 2000)
