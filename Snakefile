@@ -23,6 +23,7 @@ include: "workflow/rules/tmd.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/tables.smk"
 include: "workflow/rules/masri.smk"
+include: "workflow/rules/coexistence.smk"
 
 
 rule all:
@@ -31,3 +32,4 @@ rule all:
         figures=expand("results/figures/{fig}.{ext}", fig=FIGURES, ext=("png", "pdf")),
         table="results/tables/paper_vs_reproduced.csv",
         masri=MASRI_OUTPUTS,
+        coexistence=COEXISTENCE_OUTPUTS,

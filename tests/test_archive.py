@@ -250,3 +250,27 @@ def test_deterministic_under_source_date_epoch(tree, tmp_path, monkeypatch):
     assert a.read_bytes() == b.read_bytes()
     cff = yaml.safe_load(_member(a, "CITATION.cff"))
     assert cff["date-released"] == "2023-11-14"
+
+
+def test_snakemake_script_entry_archives_every_named_input_but_the_library(tree, monkeypatch):
+    from types import SimpleNamespace
+
+    class Named(dict):
+        def __getattr__(self, key):
+            try:
+                return self[key]
+            except KeyError:
+                raise AttributeError(key) from None
+
+    monkeypatch.chdir(tree)
+    out = tree / "results" / "archive" / "x.tar.gz"
+    smk = SimpleNamespace(
+        input=Named(sweeps=["results/sweeps/cid_a.nc"], report="results/report/index.html",
+                    config=["config/smoke.yaml"], library=["src/impact/archive.py"]),
+        output=[str(out)], params=Named(), config=CONFIG)
+    assert archive.snakemake_main(smk) == out
+    manifest = json.loads(_member(out, "MANIFEST.json"))
+    assert [e["path"] for e in manifest["files"]] == ["CITATION.cff", "ENVIRONMENT.json", "config.json",
+                                                      "config/smoke.yaml", "results/report/index.html",
+                                                      "results/sweeps/cid_a.nc"]
+    assert archive.verify_archive(out) == []

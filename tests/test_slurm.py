@@ -11,7 +11,8 @@ JSON file under the test's temporary folder.
 Without root, without the script, or when the script cannot bring the cluster up (no package
 access, say), the SLURM tests are skipped with the reason; IMPACT_REQUIRE_SLURM=1 turns these
 skips into failures (for CI machines that must run them). A cluster that is already answering is
-used as it is and left running; one this module started is stopped at the end.
+used as it is and left running (on a real cluster, give pytest a --basetemp on storage the compute
+nodes share); one this module started is stopped at the end.
 """
 
 from __future__ import annotations
@@ -82,13 +83,13 @@ class Cluster:
 
 @pytest.fixture(scope="module")
 def slurm_cluster():
-    if os.geteuid() != 0:
-        _unavailable("start-slurm.sh must run as root to install and start SLURM; not root")
     if _cluster_answers():
         # somebody's cluster: use it as it is (restarting it with our settings could
         # disturb their jobs) and leave it running
         yield Cluster(False, "sacct" if _sacct_works() else "squeue", None)
         return
+    if os.geteuid() != 0:
+        _unavailable("no SLURM cluster answering, and start-slurm.sh must run as root to start one; not root")
     if not START_SLURM.is_file():
         _unavailable(f"no SLURM cluster answering and no {START_SLURM}")
     t0 = time.perf_counter()

@@ -499,13 +499,20 @@ def verify_main(argv=None) -> int:
         for name, reason in problems:
             print(f"{name}: {reason}", file=sys.stderr)
         return 1
-    with tarfile.open(args.file, "r:gz") as tar:
-        man = next(m for m in tar.getmembers() if PurePosixPath(m.name).name == MANIFEST)
-        manifest = json.loads(tar.extractfile(man).read())
-    json.dump({"archive": str(args.file), "ok": True, "files": len(manifest["files"]),
-               "git_commit": manifest.get("git_commit"), "created": manifest.get("created")}, sys.stdout, indent=1)
+    json.dump(archive_summary(args.file), sys.stdout, indent=1)
     sys.stdout.write("\n")
     return 0
+
+
+def archive_summary(path) -> dict:
+    """What an intact archive holds, from its manifest (for the command line's JSON output)."""
+    with tarfile.open(path, "r:gz") as tar:
+        man = next(m for m in tar.getmembers()
+                   if PurePosixPath(m.name).name == MANIFEST and len(PurePosixPath(m.name).parts) <= 2)
+        manifest = json.loads(tar.extractfile(man).read())
+    return {"archive": str(path), "ok": True, "files": len(manifest["files"]),
+            "git_commit": manifest.get("git_commit"), "git_dirty": manifest.get("git_dirty"),
+            "created": manifest.get("created"), "config_sha256": manifest.get("config_sha256")}
 
 
 # --------------------------------------------------------------------------- Snakemake glue

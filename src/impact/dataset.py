@@ -45,7 +45,7 @@ def _run_value(run, name):
 
 
 def curve_dataset(base: System, gap_ratios, starts, results, protocol: Protocol, curve: dict | None = None,
-                  config: dict | None = None) -> xr.Dataset:
+                  config: dict | None = None, sweep_mode: str = "from_rest") -> xr.Dataset:
     """Dataset of one curve.
 
     results[i_start][i_gap] is the SweepResult of that start and gap ratio; all
@@ -73,7 +73,7 @@ def curve_dataset(base: System, gap_ratios, starts, results, protocol: Protocol,
     })
     ds = ds.assign_coords(gap=("gap_ratio", gap_ratios * base.a_max, {"units": LENGTH_UNIT, "long_name": "total clearance d"}))
     add_reductions(ds)
-    ds.attrs.update(_attributes(base, protocol, curve, config))
+    ds.attrs.update(_attributes(base, protocol, curve, config, sweep_mode))
     return ds
 
 
@@ -94,7 +94,7 @@ def add_reductions(ds: xr.Dataset) -> None:
         units="1", long_name="1 if the motion at the largest amplitude is 2 IPC")
 
 
-def _attributes(base: System, protocol: Protocol, curve, config) -> dict:
+def _attributes(base: System, protocol: Protocol, curve, config, sweep_mode) -> dict:
     params = {"damper": base.kind, "mu": base.mu, "beta": base.beta, "e": base.e,
               "force_ratio": base.force_ratio, "phase": base.phase, "a_max": base.a_max}
     if base.kind == "pid":
@@ -108,10 +108,14 @@ def _attributes(base: System, protocol: Protocol, curve, config) -> dict:
         "institution": "impact-dampers study",
         "references": "Chua, Pacheco, Fujino, Ito: classical and pendulum impact dampers for civil structures",
         "initial_condition": ("structure at rest (x = x' = 0); damper mass at rest at the place named by the "
-                              "'start' coordinate: centre (s = 0) or left/right wall (s = -/+ d/2)"),
+                              "'start' coordinate: centre (s = 0) or left/right wall (s = -/+ d/2)"
+                              + ("" if sweep_mode == "from_rest" else
+                                 "; at the first frequency of the continuation only, later ones start from "
+                                 "the final state of the previous frequency")),
         "protocol": json.dumps({"periods": protocol.periods, "average_from": protocol.average_from,
                                 "amplitude": "sqrt(2)*RMS of x over the window, exact integral",
-                                "sweep_mode": "from_rest"}),
+                                "sweep_mode": sweep_mode}),
+        "sweep_mode": sweep_mode,
         "parameters": json.dumps(params),
     }
     attrs.update({f"param_{k}": v for k, v in params.items()})

@@ -142,3 +142,66 @@ def plot_branches(ds, outputs) -> None:
     for out in outputs:
         save_atomic(fig, out)
     plt.close(fig)
+
+
+MODE_STYLE = {"from_rest": "-", "continuation_up": "--", "continuation_down": "-."}
+
+
+def plot_coexistence(spec: dict, from_rest, continuation: dict, ensemble, outputs) -> None:
+    """X_m against g: from rest, both continuation directions, and the ensemble's envelope."""
+    fig, ax = plt.subplots(figsize=(7.4, 4.8))
+    g = ensemble["gap_ratio"].values if ensemble is not None else from_rest["gap_ratio"].values
+    if ensemble is not None:
+        ax.fill_between(g, ensemble["X_m_min"].values, ensemble["X_m_max"].values, color="0.85",
+                        label=f"ensemble envelope ({ensemble.sizes['member']} starts)")
+        ax.plot(g, ensemble["X_m_median"].values, color="0.5", lw=1.0, label="ensemble median")
+    datasets = {"from_rest": from_rest, **continuation}
+    colors = {"centre": "C0", "left": "C1", "right": "C2"}
+    for mode, ds in datasets.items():
+        for start in ds["start"].values:
+            ax.plot(ds["gap_ratio"].values, ds["X_m"].sel(start=start).values, MODE_STYLE.get(mode, "-"),
+                    color=colors.get(str(start), "k"), lw=1.2, marker=".", ms=3,
+                    label=f"{mode.replace('_', ' ')}, start {start}")
+    ax.set_xlabel("gap ratio g = d / A_max")
+    ax.set_ylabel("amplitude ratio X_m")
+    ax.set_ylim(0.0, 1.1)
+    ax.grid(alpha=0.3)
+    ax.set_title(f"{curve_label(spec)}: sweep protocol and initial condition")
+    ax.legend(fontsize=6.5, ncol=2, loc="best")
+    fig.tight_layout()
+    for out in outputs:
+        save_atomic(fig, out)
+    plt.close(fig)
+
+
+def plot_hysteresis(spec: dict, continuation: dict, from_rest, branches, gap_ratio: float, xst_over_amax: float,
+                    outputs) -> None:
+    """Frequency response at one gap: up- and down-sweep branches and the closed-form 2-EIPC branch."""
+    fig, ax = plt.subplots(figsize=(7.4, 4.8))
+    for mode, ds in continuation.items():
+        for start in ds["start"].values:
+            amp = ds["amplitude_ratio"].sel(start=start, gap_ratio=gap_ratio).values
+            ax.plot(ds["freq_ratio"].values, amp, MODE_STYLE.get(mode, "-"), marker=".", ms=4, lw=1.0,
+                    label=f"{mode.replace('_', ' ')}, start {start}")
+    for start in from_rest["start"].values:
+        amp = from_rest["amplitude_ratio"].sel(start=start, gap_ratio=gap_ratio).values
+        ax.plot(from_rest["freq_ratio"].values, amp, "o", mfc="none", ms=4, color="0.4",
+                label=f"from rest, start {start}")
+    if branches is not None:
+        for name in ("upper", "lower"):
+            sub = branches[branches["root"] == name]
+            stable = sub["stable"].to_numpy()
+            amp = sub["amplitude_over_xst"].to_numpy() * xst_over_amax
+            ax.plot(sub["r"], np.where(stable, amp, np.nan), "k-", lw=2.0, alpha=0.6,
+                    label="closed form 2 EIPC, stable" if name == "upper" else None)
+            ax.plot(sub["r"], np.where(~stable, amp, np.nan), "k:", lw=1.0,
+                    label="closed form 2 EIPC, unstable" if name == "upper" else None)
+    ax.set_xlabel("frequency ratio r")
+    ax.set_ylabel("√2·RMS amplitude / A_max")
+    ax.set_title(f"{curve_label(spec)}, g = {gap_ratio:g}: hysteresis of the frequency response")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=6.5, loc="best")
+    fig.tight_layout()
+    for out in outputs:
+        save_atomic(fig, out)
+    plt.close(fig)

@@ -75,21 +75,21 @@ the commit, the package versions, a hash of the configuration and the run time o
 # Default captions of the study's figures (plain text; the paper's values only, quoted as the paper's).
 CAPTIONS = {
     "fig08": (
-        "Fig. 8 of the paper: the effect of the mass ratio (mu = 0.01 and 0.03) on the amplitude ratio "
+        "Fig. 8 of the paper: the effect of the mass ratio (μ = 0.01 and 0.03) on the amplitude ratio "
         "X_m = x_max / A_max against the gap ratio g = d / A_max, for the CID (a) and the PID tuned to "
-        "r' = 0.5, 1.0 and 1.5 (b-d); beta = 0.0048, e = 0.25, A_max = 10. Markers give the impacts-per-cycle "
+        "r' = 0.5, 1.0 and 1.5 (b-d); β = 0.0048, e = 0.25, A_max = 10. Markers give the impacts-per-cycle "
         "class at the largest amplitude (filled circles: 2 IPC). CID curves are drawn for both starts of the "
         "damper mass: centred (solid) and against the left wall (dotted).\n\n"
         "The paper reads X_m = 0.32 at the optimum gap for the CID and 0.42 / 0.50 / 0.80 for the PID with "
-        "r' = 0.5 / 1.0 / 1.5 (mu = 0.01), with 2 IPC over g = 0.8-1.2, 0.8-4.4 and 0.6-1.0, and over "
-        "g = 0.4-1.6 for r' = 1.0 with mu = 0.03. Its conclusion, that a larger mass lowers X_m and "
-        "moves the 2-IPC range to smaller gaps, can be checked against the curves; the reproduced values "
-        "are in the table of reported values."
+        "r' = 0.5 / 1.0 / 1.5 (μ = 0.01), with 2 IPC over g = 0.8-1.2, 0.8-4.4 and 0.6-1.0, and over "
+        "g = 0.4-1.6 for r' = 1.0 with μ = 0.03. Its conclusion, that a larger mass generally lowers X_m "
+        "(except for the PID with r' > 1) and shortens the 2-IPC range towards smaller gaps, can be checked "
+        "against the curves; the reproduced values are in the table of reported values."
     ),
     "fig09": (
         "Fig. 9 of the paper: the effect of the coefficient of restitution (e = 0.25, 0.45, 0.65) on the "
         "amplitude ratio X_m against the gap ratio g, for the CID (a) and the PID with r' = 0.5, 1.0, 1.5 "
-        "(b-d); mu = 0.01, beta = 0.0048, A_max = 10. Markers give the impacts-per-cycle class at the "
+        "(b-d); μ = 0.01, β = 0.0048, A_max = 10. Markers give the impacts-per-cycle class at the "
         "largest amplitude; CID curves are drawn for both starts of the damper mass (centred solid, left "
         "wall dotted).\n\n"
         "The paper reads, for the CID, X_m = 0.32 / 0.22 / 0.40 at the optimum gap for e = 0.25 / 0.45 / "
@@ -97,16 +97,16 @@ CAPTIONS = {
         "The table of reported values gives ours beside each."
     ),
     "fig10": (
-        "Fig. 10 of the paper: the effect of Coulomb friction under the CID's mass (nu = 0 to 0.5) on X_m "
-        "against g (mu = 0.01, beta = 0.0048, e = 0.25). The paper finds that friction lowers the CID's "
+        "Fig. 10 of the paper: the effect of Coulomb friction under the CID's mass (ν = 0 to 0.5) on X_m "
+        "against g (μ = 0.01, β = 0.0048, e = 0.25). The paper finds that friction lowers the CID's "
         "efficiency; it does not give the length and time scale friction needs, so the scale used here "
         "is the configured one (see the configuration hash below)."
     ),
     "fig11": (
-        "Fig. 11 of the paper: the CID and the PID (r' = 0.5, 1.0, 1.5), all with mu = 0.01 and e = 0.25, "
+        "Fig. 11 of the paper: the CID and the PID (r' = 0.5, 1.0, 1.5), all with μ = 0.01 and e = 0.25, "
         "against the gap ratio g, with the optimum TMD of the same mass as a dashed horizontal line "
-        "(equal-peak optimum of the tuning f and damping beta_t); beta = 0.0048, A_max = 10.\n\n"
-        "The paper's TMD optimum is f = 0.99, beta_t = 0.06, and its efficiency order is TMD > CID > PID. "
+        "(equal-peak optimum of the tuning f and damping β_t); β = 0.0048, A_max = 10.\n\n"
+        "The paper's TMD optimum is f = 0.99, β_t = 0.06, and its efficiency order is TMD > CID > PID. "
         "The table of reported values gives our optimum and whether the order holds for each start of "
         "the CID's mass."
     ),
@@ -117,7 +117,7 @@ GENERIC_FIGURE_CAPTION = "{name}: drawn from the study's result files when this 
 _FIG_NUMBER = re.compile(r"^fig0*(\d+)$")
 
 STANDARD_TABLES = {
-    # id: (relative path, title, summary kind)
+    # id: (path under results/, title)
     "paper_vs_reproduced": ("tables/paper_vs_reproduced.csv", "The paper's reported values beside ours"),
     "tmd_optimum": ("tables/tmd_optimum.json", "Optimum tuned mass damper"),
     "masri_check": ("tables/masri_check.csv", "Check against Masri's closed form (2 EIPC)"),
@@ -136,7 +136,7 @@ TABLE_CAPTIONS = {
     "tmd_optimum": (
         "The equal-peak (minimax) optimum of a TMD with the study's mass ratio on the study's structure, "
         "with Den Hartog's closed-form values (undamped structure) for comparison. The paper's optimum is "
-        "f = 0.99, beta_t = 0.06."
+        "f = 0.99, β_t = 0.06."
     ),
     "masri_check": (
         "The simulator's steady state against Masri's closed-form two-equally-spaced-impacts-per-cycle "
@@ -288,10 +288,10 @@ def standard_sections(results, figures: Iterable | None = None, captions: Mappin
         figures = [p for p in sorted((results / "figures").glob("*.png")) if p not in numerics]
     for path in figures:
         path = Path(path)
-        if not path.is_file():
+        if not path.is_file() or path.suffix.lower() not in _MIME:  # a PDF twin is not embedded
             continue
         name = path.stem
-        sections.append({"id": name, "title": _figure_title(name), "kind": "figure", "path": str(path),
+        sections.append({"id": html_id(name), "title": _figure_title(name), "kind": "figure", "path": str(path),
                          "caption": captions.get(name, figure_caption(name))})
     table("tmd_optimum")
     table("masri_check")
@@ -303,6 +303,12 @@ def standard_sections(results, figures: Iterable | None = None, captions: Mappin
                              "caption": captions.get(sid, TABLE_CAPTIONS.get(sid, ""))})
     table("numerics_stability")
     return sections
+
+
+def html_id(name: str) -> str:
+    """A valid, readable HTML id from a file's stem."""
+    out = re.sub(r"[^A-Za-z0-9_.:-]+", "-", name).strip("-") or "section"
+    return out if out[0].isalpha() else f"s-{out}"
 
 
 def _num(x) -> str:
@@ -504,13 +510,13 @@ def figure_comparison(name: str, columns: list[str], rows: list[list[str]]) -> s
     return text + "; differing: " + "; ".join(what(r) for r in misses) + " (highlighted in the table)."
 
 
-def _render_table(columns, rows, highlight=None, caption_id="") -> str:
+def _render_table(columns, rows, highlight=None) -> str:
     head = "".join(f"<th scope=\"col\">{_e(c)}</th>" for c in columns)
     body = []
     for r in rows:
         cls = ' class="miss"' if _highlighted(columns, r, highlight) else ""
         body.append(f"<tr{cls}>" + "".join(_cell(v) for v in r) + "</tr>")
-    return (f'<div class="tablewrap"><table{caption_id}><thead><tr>{head}</tr></thead>'
+    return (f'<div class="tablewrap"><table><thead><tr>{head}</tr></thead>'
             f"<tbody>{''.join(body)}</tbody></table></div>")
 
 
@@ -568,8 +574,8 @@ def _provenance_html(prov: Mapping) -> str:
             per_rule.setdefault(b["rule"], []).append(float(b["s"]))
         total = sum(sum(v) for v in per_rule.values())
         out.append("<h3>Run times (Snakemake benchmarks)</h3>")
-        out.append(f'<p class="summary">{len(bench)} jobs, {total:.1f} s of wall time in total '
-                   f"(summed over jobs; jobs may have run in parallel).</p>")
+        out.append(f'<p class="summary">{len(bench)} job{"s" if len(bench) != 1 else ""}, {total:.1f} s of '
+                   "wall time in total (summed over jobs; jobs may have run in parallel).</p>")
         out.append('<table id="provenance-rules"><thead><tr><th scope="col">rule</th><th scope="col">jobs</th>'
                    '<th scope="col">total s</th><th scope="col">mean s</th><th scope="col">max s</th></tr>'
                    "</thead><tbody>" + "".join(
@@ -626,8 +632,10 @@ def render_report(sections, provenance: Mapping | None, title: str = "Impact dam
             highlight = s.get("highlight")
             is_cmp = bool(s.get("comparison")) or sid == "paper_vs_reproduced"
             summary = _comparison_summary(columns, rows) if is_cmp else ""
-            summary = summary or table_summary(columns, rows, highlight)
-            body.append(f'<p class="summary">{_e(summary)}</p>')
+            if not summary and Path(path).suffix.lower() != ".json":  # a JSON object is a list of values
+                summary = table_summary(columns, rows, highlight)
+            if summary:
+                body.append(f'<p class="summary">{_e(summary)}</p>')
             if s.get("caption"):
                 body.append(_paragraphs(s["caption"], "caption"))
             body.append(_render_table(columns, rows, highlight))

@@ -8,6 +8,7 @@ measure the amplitude as sqrt(2) * RMS of x over the window from
 
 from __future__ import annotations
 
+import dataclasses
 import fcntl
 import math
 import os
@@ -251,7 +252,39 @@ class SweepResult:
         return float(self.r[int(np.nanargmax(amp))]) if np.any(np.isfinite(amp)) else math.nan
 
 
-def sweep(system: System, r_values, protocol: Protocol = Protocol()) -> SweepResult:
-    """Frequency sweep, every point started afresh from the protocol's rest state."""
+SWEEP_MODES = ("from_rest", "continuation_up", "continuation_down")
+
+
+def sweep(system: System, r_values, protocol: Protocol = Protocol(), mode: str = "from_rest",
+          state=None, contact=None) -> SweepResult:
+    """Frequency sweep under the protocol.
+
+    from_rest: every frequency starts afresh from the protocol's start (or from
+    `state`/`contact` when given: one initial condition for every frequency).
+    continuation_up / _down: frequencies in increasing / decreasing order, each
+    starting from the final state of the previous one, as a slow physical
+    sweep would; the force stays continuous (its phase carries over).  Each
+    frequency still runs the protocol's periods and window, so the first
+    average_from periods settle the new frequency.  Results are in the order
+    of r_values either way.
+    """
+    if mode not in SWEEP_MODES:
+        raise ValueError(f"sweep mode {mode!r} is not one of {', '.join(SWEEP_MODES)}")
     r_values = np.asarray(r_values, dtype=float)
-    return SweepResult(r=r_values, runs=[simulate(system, float(r), protocol) for r in r_values])
+    if mode == "from_rest":
+        runs = [simulate(system, float(r), protocol, state=state, contact=contact) for r in r_values]
+        return SweepResult(r=r_values, runs=runs)
+    order = np.argsort(r_values, kind="stable")
+    if mode == "continuation_down":
+        order = order[::-1]
+    runs = [None] * len(r_values)
+    current, z, code = system, state, contact
+    for i in order:
+        r = float(r_values[i])
+        run = simulate(current, r, protocol, state=z, contact=code)
+        runs[i] = run
+        z, code = run.final_state, run.final_contact
+        # the force phase at the end of this run is the next run's phase at t = 0
+        end_phase = math.remainder(r * protocol.t_end + current.phase, 2.0 * math.pi)
+        current = dataclasses.replace(current, phase=end_phase)
+    return SweepResult(r=r_values, runs=runs)

@@ -51,9 +51,12 @@ def figure_curves(cfg: dict, figure: str) -> dict:
 
 
 def all_curves(cfg: dict) -> dict:
+    """Every curve the study sweeps: those drawn in figures and those of the coexistence stage."""
     out = {}
     for fig in cfg["figures"]:
         out.update(figure_curves(cfg, fig))
+    for spec in cfg.get("coexistence", {}).get("curves", []):
+        out.setdefault(curve_id(spec), spec)
     return out
 
 
@@ -101,8 +104,8 @@ def curve_starts(cfg: dict, spec: dict) -> list:
     return list(cfg["protocol"]["starts"][spec["damper"]])
 
 
-def run_curve(cfg: dict, spec: dict, gap_ratios=None):
-    """All sweeps of one curve, as a self-describing dataset."""
+def run_curve(cfg: dict, spec: dict, gap_ratios=None, mode: str = "from_rest"):
+    """All sweeps of one curve (one sweep mode), as a self-describing dataset."""
     from .dataset import curve_dataset
 
     gaps = gap_grid(cfg) if gap_ratios is None else np.asarray(gap_ratios, dtype=float)
@@ -112,9 +115,10 @@ def run_curve(cfg: dict, spec: dict, gap_ratios=None):
     results = []
     for start in starts:
         protocol = Protocol(periods=proto_cfg["periods"], average_from=proto_cfg["average_from"], start=start)
-        results.append([sweep(curve_system(cfg, spec, g), r, protocol) for g in gaps])
+        results.append([sweep(curve_system(cfg, spec, g), r, protocol, mode=mode) for g in gaps])
     base = curve_system(cfg, spec, float(gaps[0]))
-    return curve_dataset(base, gaps, starts, results, protocol, curve={"id": curve_id(spec), **spec}, config=cfg)
+    return curve_dataset(base, gaps, starts, results, protocol, curve={"id": curve_id(spec), **spec}, config=cfg,
+                         sweep_mode=mode)
 
 
 def optimum(ds, start: str) -> tuple[float, float]:

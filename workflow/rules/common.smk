@@ -38,6 +38,17 @@ MASRI_OUTPUTS = (
 )
 
 
+COEXISTENCE_CURVES = config.get("coexistence", {}).get("curves", [])
+COEXISTENCE_MODES = config.get("coexistence", {}).get("modes", ["continuation_up", "continuation_down"])
+COEXISTENCE_OUTPUTS = (
+    ["results/tables/coexistence.csv"]
+    + [f"results/figures/coexistence_{curve_id(s)}.png" for s in COEXISTENCE_CURVES]
+    + [f"results/figures/hysteresis_{curve_id(s)}.png" for s in COEXISTENCE_CURVES]
+    if COEXISTENCE_CURVES
+    else []
+)
+
+
 def sweep_file(spec):
     return f"results/sweeps/{curve_id(spec)}.nc"
 

@@ -1,0 +1,167 @@
+"""Coexisting steady states of the CID: continuation sweeps and the initial-condition envelope.
+
+The paper's protocol restarts every frequency from rest; a shaker-table sweep
+carries its state from one frequency to the next (continuation), and a real
+damper may start anywhere.  For a curve we run both continuation directions
+and an ensemble of starting states, and report the envelope of X_m: the worst
+case a design engineer must expect, not one lucky start.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+from . import _kernels as K
+from .params import Protocol, System
+from .simulate import sweep
+from .study import curve_id, curve_system, freq_grid, gap_grid, optimum
+
+#: amplitude and AIPC tolerances that tell two attractors apart (window transients stay below)
+AMPLITUDE_RTOL = 1e-2
+AIPC_ATOL = 0.05
+
+
+def ensemble_members(n: int, seed: int) -> pd.DataFrame:
+    """Starting states, as fractions so they apply to every gap.
+
+    Members 0-2 are the protocol's starts at rest (centre, left, right wall);
+    the others draw, from a seeded generator, the damper mass's place across
+    the clearance (s0 / (d/2) in [-1, 1]), its velocity relative to the
+    structure (in units of A_max * omega) and the structure's displacement
+    (in units of A_max, at rest).
+    """
+    if n < 3:
+        raise ValueError("an ensemble needs at least the three protocol starts (members >= 3)")
+    rng = np.random.default_rng(seed)
+    rest = pd.DataFrame({"place": [0.0, -1.0, 1.0], "velocity": [0.0] * 3, "structure": [0.0] * 3})
+    drawn = pd.DataFrame({"place": rng.uniform(-1.0, 1.0, n - 3), "velocity": rng.uniform(-1.0, 1.0, n - 3),
+                          "structure": rng.uniform(-1.0, 1.0, n - 3)})
+    return pd.concat([rest, drawn], ignore_index=True)
+
+
+def member_state(system: System, member) -> tuple[np.ndarray, int]:
+    """(x, x', y, y') and contact code of one member for this system."""
+    half = 0.5 * system.gap
+    if member["velocity"] == 0.0 and abs(member["place"]) == 1.0 and system.gap > 0:
+        side = int(member["place"])
+        return np.array([0.0, 0.0, side * half, 0.0]), K.encode_contact(K.MODE_STUCK, side, 0)
+    x0 = member["structure"] * system.a_max
+    state = np.array([x0, 0.0, x0 + member["place"] * half, member["velocity"] * system.a_max])
+    return state, K.encode_contact(K.MODE_FREE, 0, 0)
+
+
+def count_attractors(amplitude: np.ndarray, aipc: np.ndarray) -> int:
+    """Distinct (amplitude, AIPC) pairs among members, within the tolerances."""
+    seen = []
+    for a, n in zip(amplitude, aipc):
+        if not (math.isfinite(a) and math.isfinite(n)):
+            continue
+        if not any(abs(a - b) <= AMPLITUDE_RTOL * max(abs(a), abs(b)) and abs(n - m) <= AIPC_ATOL for b, m in seen):
+            seen.append((a, n))
+    return len(seen)
+
+
+def run_ensemble(cfg: dict, spec: dict, members: pd.DataFrame, protocol: Protocol) -> xr.Dataset:
+    gaps = gap_grid(cfg)
+    r = freq_grid(cfg)
+    amp = np.empty((len(members), len(gaps), len(r)))
+    aipc = np.empty_like(amp)
+    for j, g in enumerate(gaps):
+        system = curve_system(cfg, spec, float(g))
+        for i, member in members.iterrows():
+            state, code = member_state(system, member)
+            result = sweep(system, r, protocol, state=state, contact=code)
+            amp[i, j] = result.column("amplitude")
+            aipc[i, j] = result.column("aipc")
+    return ensemble_dataset(spec, members, gaps, r, amp, aipc, curve_system(cfg, spec, 1.0).a_max)
+
+
+def ensemble_dataset(spec, members, gaps, r, amp, aipc, a_max) -> xr.Dataset:
+    dims = ("member", "gap_ratio", "freq_ratio")
+    ds = xr.Dataset(
+        {"amplitude": (dims, amp, {"units": "model_unit", "long_name": "sqrt(2)*RMS amplitude of x"}),
+         "aipc": (dims, aipc, {"units": "1", "long_name": "average impacts per cycle"})},
+        coords={"member": ("member", np.arange(len(members)), {"long_name": "ensemble member"}),
+                "gap_ratio": ("gap_ratio", gaps, {"units": "1", "long_name": "gap ratio g = d / A_max"}),
+                "freq_ratio": ("freq_ratio", r, {"units": "1", "long_name": "frequency ratio r"}),
+                "start_place": ("member", members["place"].to_numpy(), {
+                    "units": "1", "long_name": "damper mass's initial place s0 / (d/2)"}),
+                "start_velocity": ("member", members["velocity"].to_numpy(), {
+                    "units": "1", "long_name": "damper mass's initial velocity relative to the structure / (A_max omega)"}),
+                "start_structure": ("member", members["structure"].to_numpy(), {
+                    "units": "1", "long_name": "structure's initial displacement / A_max (at rest)"})})
+    xm = amp.max(axis=2) / a_max
+    ds["X_m"] = (("member", "gap_ratio"), xm, {"units": "1", "long_name": "amplitude ratio X_m of each member"})
+    for stat, fun in (("min", np.nanmin), ("median", np.nanmedian), ("max", np.nanmax)):
+        ds[f"X_m_{stat}"] = ("gap_ratio", fun(xm, axis=0), {"units": "1", "long_name": f"{stat} of X_m over the ensemble"})
+    counts = np.array([[count_attractors(amp[:, j, k], aipc[:, j, k]) for k in range(len(r))]
+                       for j in range(len(gaps))])
+    ds["attractors"] = (("gap_ratio", "freq_ratio"), counts.astype(np.int16), {
+        "units": "1", "long_name": "distinct steady states met (by amplitude and AIPC)"})
+    ds["attractors_max"] = ("gap_ratio", counts.max(axis=1).astype(np.int16), {
+        "units": "1", "long_name": "most distinct steady states met at one frequency"})
+    ds.attrs.update(curve=str(curve_id(spec)), a_max=a_max,
+                    attractor_tolerances=f"amplitude rel {AMPLITUDE_RTOL}, AIPC abs {AIPC_ATOL}")
+    return ds
+
+
+def coexistence_table(paper: dict, from_rest: dict, continuation: dict, ensembles: dict) -> pd.DataFrame:
+    """Per CID curve: X_m at the optimum gap for every mode and start, the envelope, the best match.
+
+    paper: curve id -> the paper's X_m; from_rest / ensembles: id -> dataset;
+    continuation: (id, mode) -> dataset.
+    """
+    rows = []
+    for cid, ds_rest in from_rest.items():
+        candidates = {}
+        for start in ds_rest["start"].values:
+            candidates[f"from_rest, start {start}"] = optimum(ds_rest, str(start))
+        for (cid2, mode), ds in continuation.items():
+            if cid2 == cid:
+                for start in ds["start"].values:
+                    candidates[f"{mode}, start {start}"] = optimum(ds, str(start))
+        ens = ensembles.get(cid)
+        row = {"curve": cid, "paper_X_m": paper.get(cid, math.nan)}
+        for name, (g, xm) in candidates.items():
+            row[f"X_m [{name}]"] = xm
+            row[f"g [{name}]"] = g
+        if ens is not None:
+            for stat in ("min", "median", "max"):
+                vals = ens[f"X_m_{stat}"].values
+                i = int(np.nanargmin(vals))
+                row[f"envelope {stat}: X_m at its optimum"] = float(vals[i])
+                row[f"envelope {stat}: g"] = float(ens["gap_ratio"].values[i])
+            row["most attractors at one (g, r)"] = int(ens["attractors"].max())
+        target = row["paper_X_m"]
+        if math.isfinite(target):
+            best = min(candidates.items(), key=lambda kv: abs(kv[1][1] - target))
+            row["closest to the paper"] = best[0]
+            row["closest X_m"] = best[1][1]
+            row["closest rel. difference"] = (best[1][1] - target) / target
+            if ens is not None:
+                row["paper within ensemble range"] = bool(
+                    np.nanmin(ens["X_m_min"].values) <= target <= np.nanmin(ens["X_m_max"].values))
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def e_trend_statement(table: pd.DataFrame, e_of: dict) -> str:
+    """Does any mode, start or the envelope give the paper's e-trend (X_m lowest at e = 0.45)?"""
+    curves = sorted((e_of[c], c) for c in table["curve"] if c in e_of)
+    if len(curves) < 3:
+        return "not enough restitution values in the study to judge the e-trend"
+    cols = [c for c in table.columns if c.startswith("X_m [") or (c.startswith("envelope") and c.endswith("optimum"))]
+    found = []
+    for col in cols:
+        vals = [float(table.loc[table["curve"] == cid, col].iloc[0]) for _, cid in curves]
+        if all(math.isfinite(v) for v in vals) and int(np.argmin(vals)) == 1:
+            found.append(f"{col.strip('X_m []')}: " + "/".join(f"{v:.3f}" for v in vals))
+    es = "/".join(f"{e:g}" for e, _ in curves)
+    if found:
+        return f"X_m at the optimum gap is lowest at the middle e (e = {es}) for: " + "; ".join(found)
+    return (f"No sweep mode, start or ensemble statistic gives X_m lowest at the middle e (e = {es}): "
+            "the paper's e-trend is not explained by the initial condition or the sweep protocol here")

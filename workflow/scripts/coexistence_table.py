@@ -1,0 +1,31 @@
+"""Glue: coexistence datasets -> per-curve table and the e-trend statement."""
+import json
+
+import xarray as xr
+
+from impact.coexistence import coexistence_table, e_trend_statement
+from impact.comparison import X_M_AT_OPTIMUM
+from impact.pipeline import logged, write_csv_atomic, write_json_atomic
+from impact.study import curve_id
+
+with logged(snakemake.log[0]) as log:
+    paper = {curve_id(spec): value for _, _, spec, value in X_M_AT_OPTIMUM}
+    rest, e_of = {}, {}
+    for path in snakemake.input.from_rest:
+        ds = xr.load_dataset(path)
+        spec = json.loads(ds.attrs["curve"])
+        rest[spec["id"]] = ds
+        e_of[spec["id"]] = spec["e"]
+    continuation = {}
+    for path in snakemake.input.continuation:
+        ds = xr.load_dataset(path)
+        continuation[(json.loads(ds.attrs["curve"])["id"], ds.attrs["sweep_mode"])] = ds
+    ensembles = {}
+    for path in snakemake.input.ensemble:
+        ds = xr.load_dataset(path)
+        ensembles[ds.attrs["curve"]] = ds
+    table = coexistence_table(paper, rest, continuation, ensembles)
+    statement = e_trend_statement(table, e_of)
+    log.info("%s\n%s", table.T.to_string(), statement)
+    write_csv_atomic(snakemake.output.table, table)
+    write_json_atomic(snakemake.output.statement, {"e_trend": statement})
