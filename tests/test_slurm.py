@@ -190,7 +190,8 @@ def runs(slurm_cluster, tmp_path_factory) -> Runs:
     times = {
         "slurm_run_seconds": round(slurm_s, 1),
         "local_run_seconds": round(local_s, 1),
-        "cluster_start_seconds": None if slurm_cluster.start_seconds is None else round(slurm_cluster.start_seconds, 1),
+        "cluster_start_seconds": (None if slurm_cluster.start_seconds is None
+                                  else round(slurm_cluster.start_seconds, 1)),
         "slurm_jobs": len(_submissions(slurm_log)),
         "slurm_status_command": slurm_cluster.status_command,
         "slurm_node_cpus": _node_cpus(),
