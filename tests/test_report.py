@@ -234,12 +234,18 @@ def test_sections_as_a_dict_and_only_when_given(tmp_path, results):
 
 def test_snakemake_captions_exist_for_every_default_caption():
     folder = ROOT / "workflow" / "report"
-    for name in list(report.CAPTIONS) + ["paper_vs_reproduced", "tmd_optimum", "workflow", "figure"]:
+    names = list(report.CAPTIONS) + ["paper_vs_reproduced", "tmd_optimum", "masri_check", "coexistence",
+                                     "coexistence_figure", "hysteresis_figure", "workflow", "figure"]
+    for name in names:
         assert (folder / f"{name}.rst").stat().st_size > 100, name
-    # the figure rule's caption includes each figure's own file
+    # the figure rule's caption (one rule, a {fig} wildcard) includes each paper figure's own file
     dispatch = (folder / "figure.rst").read_text()
     for name in report.CAPTIONS:
-        assert f'"{name}"' in dispatch
+        if name.startswith("fig"):
+            assert f'"{name}"' in dispatch
+    assert {report.snakemake_category(n) for n in ("fig08", "fig09", "fig10")} == {"5. Parametric study"}
+    assert report.snakemake_category("fig11") == "6. Comparison of CID, PID and TMD"
+    assert report.snakemake_subcategory("hysteresis_cid_mu0.01_e0.25") == "Hysteresis"
 
 
 # --------------------------------------------------------------------------- headless Chromium
@@ -362,3 +368,18 @@ def test_snakemake_script_entry_uses_only_declared_inputs(results):
     assert re.findall(r'<section id="([^"]+)"', page) == ["overview", "paper_vs_reproduced", "fig08", "provenance"]
     assert "<th scope=\"row\">executor</th><td>slurm</td>" in page
     assert "1 job, 3.1 s of wall time in total" in page
+
+
+def test_long_tables_fold_and_other_figures_get_captions(tmp_path, results):
+    rows = [[str(i), "True" if i % 3 else "False"] for i in range(report.LONG_TABLE + 1)]
+    _csv(tmp_path / "long.csv", ["i", "ok"], rows)
+    shutil.copy(results / "figures" / "fig99.png", results / "figures" / "coexistence_cid_mu0.01_e0.25.png")
+    sections = report.standard_sections(results, tables=[tmp_path / "long.csv"])
+    ids = [s["id"] for s in sections]
+    assert ids.index("coexistence_cid_mu0.01_e0.25") > ids.index("masri_check")  # grouped by topic
+    assert ids[-1] == "long"
+    page, shown = report.render_report(sections, None)
+    assert shown == ids
+    assert f"<details><summary>All {report.LONG_TABLE + 1} rows</summary>" in page
+    assert f"{report.LONG_TABLE + 1} rows; ok: 40 of 61 true" in page
+    assert "Coexisting steady states of cid_mu0.01_e0.25: X_m against g" in page

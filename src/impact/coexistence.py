@@ -159,9 +159,12 @@ def e_trend_statement(table: pd.DataFrame, e_of: dict) -> str:
     for col in cols:
         vals = [float(table.loc[table["curve"] == cid, col].iloc[0]) for _, cid in curves]
         if all(math.isfinite(v) for v in vals) and int(np.argmin(vals)) == 1:
-            found.append(f"{col.strip('X_m []')}: " + "/".join(f"{v:.3f}" for v in vals))
+            name = col[len("X_m ["):-1] if col.startswith("X_m [") else col.replace(": X_m at its optimum", "")
+            found.append(f"{name}: " + "/".join(f"{v:.3f}" for v in vals))
     es = "/".join(f"{e:g}" for e, _ in curves)
     if found:
-        return f"X_m at the optimum gap is lowest at the middle e (e = {es}) for: " + "; ".join(found)
+        paper = "0.32/0.22/0.40" if es == "0.25/0.45/0.65" else "see the table"
+        return (f"X_m at the optimum gap is lowest at the middle e (e = {es}; paper {paper}) for: "
+                + "; ".join(found))
     return (f"No sweep mode, start or ensemble statistic gives X_m lowest at the middle e (e = {es}): "
             "the paper's e-trend is not explained by the initial condition or the sweep protocol here")

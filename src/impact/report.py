@@ -111,6 +111,33 @@ CAPTIONS = {
         "the CID's mass."
     ),
 }
+CAPTIONS.update({
+    "masri_stability": (
+        "Masri's closed-form solution with two equally spaced impacts per cycle (2 EIPC) for the CID: where "
+        "it exists and where it is stable, in the plane of the frequency ratio r and the clearance "
+        "d / (F0/K), one panel per coefficient of restitution. The paper uses this closed form to check "
+        "its simulation in the 2-EIPC range; the table of the closed-form check compares the simulator "
+        "with it point by point."
+    ),
+    "masri_branches": (
+        "The closed-form 2-EIPC branches of the CID (stable: solid, unstable: dashed) against the "
+        "simulator's runs from rest. Where a run from rest lands on a stable branch the two agree to "
+        "round-off; where it does not, the motion from rest has found another steady state."
+    ),
+})
+# Captions of figures drawn once per curve, by the start of their file name.
+CAPTION_PREFIXES = {
+    "coexistence_": (
+        "Coexisting steady states of {curve}: X_m against g from rest, from both directions of a "
+        "continuation in frequency, and the envelope of an ensemble of initial conditions. The paper "
+        "does not say where its damper mass started; the spread between these curves is how much that "
+        "choice can matter."
+    ),
+    "hysteresis_": (
+        "Frequency response of {curve} at one gap: the up-sweep and down-sweep continuation branches and "
+        "the closed-form 2-EIPC branch. Where the branches differ the response depends on its history."
+    ),
+}
 GENERIC_FIGURE_CAPTION = "{name}: drawn from the study's result files when this report was built."
 
 # Figure numbers of the paper for each figure id (to pick that figure's rows of the comparison table).
@@ -121,6 +148,8 @@ STANDARD_TABLES = {
     "paper_vs_reproduced": ("tables/paper_vs_reproduced.csv", "The paper's reported values beside ours"),
     "tmd_optimum": ("tables/tmd_optimum.json", "Optimum tuned mass damper"),
     "masri_check": ("tables/masri_check.csv", "Check against Masri's closed form (2 EIPC)"),
+    "masri_summary": ("checks/masri_summary.json", "Closed-form check: summary"),
+    "coexistence": ("tables/coexistence.csv", "Coexisting steady states"),
     "cross_validation": ("tables/cross_validation.csv", "Cross-validation of the simulator"),
     "numerics_stability": ("tables/numerics_stability.csv", "Numerics: stability of the integrators"),
 }
@@ -142,6 +171,8 @@ TABLE_CAPTIONS = {
         "The simulator's steady state against Masri's closed-form two-equally-spaced-impacts-per-cycle "
         "solution, where that solution exists and is stable."
     ),
+    "masri_summary": "The closed-form check summarised by start of the damper mass and by the orbit's stability margin.",
+    "coexistence": "Steady states reached from rest, by continuation in frequency and from an ensemble of starts.",
     "cross_validation": "The exact event-driven core against independent integrators on the same cases.",
     "numerics_stability": "Which integrators stay stable, and where, on the study's cases.",
     "numerics_error_runtime": (
@@ -158,15 +189,31 @@ SNAKEMAKE_CATEGORIES = {
     "fig11": ("6. Comparison of CID, PID and TMD", "Fig. 11: efficiency"),
     "tmd_optimum": ("6. Comparison of CID, PID and TMD", "TMD optimum"),
     "paper_vs_reproduced": ("Reproduction", "Paper vs reproduced"),
+    "masri_check": ("Closed-form check (Masri, 2 EIPC)", "Point by point"),
+    "masri_stability": ("Closed-form check (Masri, 2 EIPC)", "Existence and stability"),
+    "masri_branches": ("Closed-form check (Masri, 2 EIPC)", "Branches and runs from rest"),
+    "coexistence": ("Initial conditions and coexisting states", "Table"),
+    "coexistence_": ("Initial conditions and coexisting states", "Coexisting states"),
+    "hysteresis_": ("Initial conditions and coexisting states", "Hysteresis"),
 }
 
 
+def _category(name: str) -> tuple[str, str]:
+    if name in SNAKEMAKE_CATEGORIES:
+        return SNAKEMAKE_CATEGORIES[name]
+    for prefix, value in SNAKEMAKE_CATEGORIES.items():
+        if prefix.endswith("_") and name.startswith(prefix):
+            return value
+    return ("Other results", name)
+
+
 def snakemake_category(name: str) -> str:
-    return SNAKEMAKE_CATEGORIES.get(name, ("Other results", name))[0]
+    """Category of a result in Snakemake's report (by paper section), for report(category=...)."""
+    return _category(name)[0]
 
 
 def snakemake_subcategory(name: str) -> str:
-    return SNAKEMAKE_CATEGORIES.get(name, ("Other results", name))[1]
+    return _category(name)[1]
 
 
 # --------------------------------------------------------------------------- provenance
@@ -249,18 +296,37 @@ def collect_provenance(config=None, executor: str = "unknown", benchmarks: Itera
 
 
 def figure_caption(name: str) -> str:
-    return CAPTIONS.get(name, GENERIC_FIGURE_CAPTION.format(name=name))
+    if name in CAPTIONS:
+        return CAPTIONS[name]
+    for prefix, text in CAPTION_PREFIXES.items():
+        if name.startswith(prefix) and len(name) > len(prefix):
+            return text.format(curve=name[len(prefix):])
+    return GENERIC_FIGURE_CAPTION.format(name=name)
+
+
+def _figure_group(name: str) -> str:
+    if _FIG_NUMBER.match(name):
+        return "paper"
+    if name.startswith("masri_"):
+        return "masri"
+    if name.startswith(("coexistence_", "hysteresis_")):
+        return "coexistence"
+    if name in STANDARD_FIGURES_EXTRA or name.startswith("numerics_"):
+        return "numerics"
+    return "other"
 
 
 def standard_sections(results, figures: Iterable | None = None, captions: Mapping | None = None,
-                      overview: bool = True, extra: Mapping | None = None, config: Mapping | None = None
-                      ) -> list[dict]:
+                      overview: bool = True, extra: Mapping | None = None, config: Mapping | None = None,
+                      tables: Iterable = ()) -> list[dict]:
     """The study's sections, in order, for the result files under ``results`` that exist.
 
-    figures: PNG paths (default: results/figures/*.png, numerics figure excluded); captions:
-    caption per section id, over the defaults; extra: {id: path} for any standard table or
-    figure kept elsewhere than its standard place; config: the run's configuration, summarised
-    in the overview (so the protocol stated is this run's, not a copy of it).
+    Order: the study; the paper's values beside ours; the paper's figures; the TMD optimum; the
+    closed-form check (tables, figures); coexisting states; cross-validation; numerics; any other
+    figure; any other table.  figures: image paths (default: results/figures/*.png); captions:
+    caption per section id, over the defaults; extra: {id: path} for a standard table or figure
+    kept elsewhere than its standard place; config: the run's configuration, summarised in the
+    overview (so the protocol stated is this run's); tables: further CSV/JSON tables, shown last.
     """
     results = Path(results)
     captions = dict(captions or {})
@@ -281,27 +347,40 @@ def standard_sections(results, figures: Iterable | None = None, captions: Mappin
                 sec["comparison"] = True
             sections.append(sec)
 
-    table("paper_vs_reproduced")
-    numerics = {results / rel for rel, _ in STANDARD_FIGURES_EXTRA.values()} | set(
-        extra.get(k) for k in STANDARD_FIGURES_EXTRA if k in extra)
     if figures is None:
-        figures = [p for p in sorted((results / "figures").glob("*.png")) if p not in numerics]
+        figures = sorted((results / "figures").glob("*.png"))
+        figures += [p for sid, p in extra.items() if sid in STANDARD_FIGURES_EXTRA and p not in figures]
+        figures += [results / rel for sid, (rel, _) in STANDARD_FIGURES_EXTRA.items()
+                    if sid not in extra and (results / rel) not in figures]
+    by_group: dict[str, list[dict]] = {}
     for path in figures:
         path = Path(path)
         if not path.is_file() or path.suffix.lower() not in _MIME:  # a PDF twin is not embedded
             continue
         name = path.stem
-        sections.append({"id": html_id(name), "title": _figure_title(name), "kind": "figure", "path": str(path),
-                         "caption": captions.get(name, figure_caption(name))})
+        sid = next((k for k, v in extra.items() if v == path), None) or html_id(name)
+        by_group.setdefault(_figure_group(sid), []).append(
+            {"id": sid, "title": _figure_title(name), "kind": "figure", "path": str(path),
+             "caption": captions.get(sid, TABLE_CAPTIONS.get(sid) or figure_caption(name))})
+
+    table("paper_vs_reproduced")
+    sections += by_group.get("paper", [])
     table("tmd_optimum")
     table("masri_check")
+    table("masri_summary")
+    sections += by_group.get("masri", [])
+    table("coexistence")
+    sections += by_group.get("coexistence", [])
     table("cross_validation")
-    for sid, (rel, title) in STANDARD_FIGURES_EXTRA.items():
-        path = extra.get(sid, results / rel)
-        if path.is_file():
-            sections.append({"id": sid, "title": title, "kind": "figure", "path": str(path),
-                             "caption": captions.get(sid, TABLE_CAPTIONS.get(sid, ""))})
+    sections += by_group.get("numerics", [])
     table("numerics_stability")
+    sections += by_group.get("other", [])
+    for path in tables:
+        path = Path(path)
+        if path.is_file():
+            sid = html_id(path.stem)
+            sections.append({"id": sid, "title": captions.get(f"{sid}:title", path.stem.replace("_", " ")),
+                             "kind": "table", "path": str(path), "caption": captions.get(sid, "")})
     return sections
 
 
@@ -360,6 +439,14 @@ def _figure_title(name: str) -> str:
                   10: "the effect of friction", 11: "CID, PID and the optimum TMD"}
         n = int(m.group(1))
         return f"Fig. {n}: {titles[n]}" if n in titles else f"Fig. {n}"
+    named = {"masri_stability": "Masri's closed form: existence and stability",
+             "masri_branches": "Masri's closed form: branches and runs from rest",
+             "numerics_error_runtime": "Numerics: error against run time"}
+    if name in named:
+        return named[name]
+    for prefix, title in (("coexistence_", "Coexisting steady states"), ("hysteresis_", "Hysteresis")):
+        if name.startswith(prefix) and len(name) > len(prefix):
+            return f"{title}: {name[len(prefix):]}"
     return name.replace("_", " ")
 
 
@@ -369,7 +456,8 @@ _CSS = """
 body{font-family:sans-serif;line-height:1.45;margin:0 auto;max-width:72rem;padding:1rem 2rem;color:#222}
 h1{font-size:1.6rem;margin-bottom:.2rem}h2{font-size:1.25rem;border-bottom:1px solid #ccc;padding-top:.6rem}
 nav ol{columns:2;font-size:.92rem}
-table{border-collapse:collapse;font-size:.85rem;margin:.6rem 0;max-width:100%}
+.tablewrap{overflow-x:auto;max-width:100%}
+table{border-collapse:collapse;font-size:.85rem;margin:.6rem 0}
 th,td{border:1px solid #ccc;padding:.2rem .45rem;text-align:left;vertical-align:top}
 th{background:#f0f0f0}td.num{text-align:right;font-variant-numeric:tabular-nums}
 tr.miss td{background:#fde2e1}tr.miss td:first-child{border-left:4px solid #c0392b}
@@ -510,14 +598,20 @@ def figure_comparison(name: str, columns: list[str], rows: list[list[str]]) -> s
     return text + "; differing: " + "; ".join(what(r) for r in misses) + " (highlighted in the table)."
 
 
+LONG_TABLE = 60  # rows; a longer table is folded under its summary line
+
+
 def _render_table(columns, rows, highlight=None) -> str:
     head = "".join(f"<th scope=\"col\">{_e(c)}</th>" for c in columns)
     body = []
     for r in rows:
         cls = ' class="miss"' if _highlighted(columns, r, highlight) else ""
         body.append(f"<tr{cls}>" + "".join(_cell(v) for v in r) + "</tr>")
-    return (f'<div class="tablewrap"><table><thead><tr>{head}</tr></thead>'
-            f"<tbody>{''.join(body)}</tbody></table></div>")
+    table = (f'<div class="tablewrap"><table><thead><tr>{head}</tr></thead>'
+             f"<tbody>{''.join(body)}</tbody></table></div>")
+    if len(rows) > LONG_TABLE:
+        return f"<details><summary>All {len(rows)} rows</summary>{table}</details>"
+    return table
 
 
 _MIME = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".gif": "image/gif",
@@ -702,7 +796,14 @@ def build_report(out_html, sections, provenance: Mapping | None) -> Path:
 
 
 def snakemake_main(smk) -> Path:
-    """Body of the ``report`` rule's script: named inputs -> sections; params.executor."""
+    """Body of the ``report`` rule's script.
+
+    Named inputs: ``figures`` (images), one per standard table or figure id (``paper_vs_reproduced``,
+    ``tmd_optimum``, ``masri_check``, ``masri_summary``, ``coexistence``, ``cross_validation``,
+    ``numerics_stability``, ``numerics_error_runtime``), ``tables`` (any further CSV/JSON tables),
+    ``benchmarks`` (benchmark TSVs; default: every one under results/benchmarks); ``library`` is
+    ignored.  ``resources.executor`` (or ``params.executor``) names the executor.
+    """
     inp = smk.input
     names = set(inp.keys()) if hasattr(inp, "keys") else set()
 
@@ -712,16 +813,17 @@ def snakemake_main(smk) -> Path:
         value = getattr(inp, key)
         return [value] if isinstance(value, str) else list(value)
 
-    figures = named("figures")
     extra = {}
     for sid in list(STANDARD_TABLES) + list(STANDARD_FIGURES_EXTRA):
         files = named(sid)
         if files:
             extra[sid] = files[0]
+    figures = named("figures") + [extra[sid] for sid in STANDARD_FIGURES_EXTRA if sid in extra]
+    tables = named("tables")
     results = Path(smk.output[0]).parent.parent
-    sections = standard_sections(results, figures=figures, extra=extra, config=smk.config)
+    sections = standard_sections(results, figures=figures, extra=extra, config=smk.config, tables=tables)
     # only what the rule declares: standard files not wired as inputs stay out
-    declared = {str(Path(p)) for p in figures} | {str(Path(p)) for p in extra.values()}
+    declared = {str(Path(p)) for p in figures + tables} | {str(Path(p)) for p in extra.values()}
     sections = [s for s in sections if s["kind"] == "text" or str(Path(s["path"])) in declared]
     bench = named("benchmarks")
     if not bench:

@@ -254,16 +254,32 @@ def stuck_exit_functionals(system: System, side: int, s0: float, contact=None) -
     return [(R.scaled(1.0, -af), 1), (R.scaled(-1.0, -af), -1)]
 
 
-def leaves_now(g: Functional, t: float, z, aff: Affine, r: float, phase: float, scale: float) -> bool:
-    """Is g > 0 now, or zero and increasing (the constraint is released at once)?"""
+def time_resolution(t: float) -> float:
+    """Width of the time window an event located at t is resolved to (root finders work
+    to a few ulps of t); a constraint function crossing zero within it counts as zero."""
+    return 1e-12 * max(1.0, abs(t))
+
+
+def near_zero(g: Functional, t: float, z, aff: Affine, r: float, phase: float) -> tuple[bool, float, float]:
+    """(is g zero to within round-off and event-time resolution, g, g') at (t, z)."""
+    z = np.asarray(z, float)
     val = g(t, z, r, phase)
-    tol = 1e-13 * scale
-    if val > tol:
-        return True
-    if val < -tol:
-        return False
     rate = g.rate(t, z, aff, r, phase)
-    if abs(rate) > tol:
+    size = float(np.abs(g.w) @ np.abs(z)) + abs(g.w0) + abs(g.wf)
+    tol = 1e-13 * size + abs(rate) * time_resolution(t)
+    return abs(val) <= tol, val, rate
+
+
+def leaves_now(g: Functional, t: float, z, aff: Affine, r: float, phase: float, scale: float = 0.0) -> bool:
+    """Is g > 0 now, or zero and increasing (the constraint is released at once)?
+
+    "Zero" allows for round-off and for the time resolution of the event that
+    brought the run here (see :func:`near_zero`).
+    """
+    zero, val, rate = near_zero(g, t, z, aff, r, phase)
+    if not zero:
+        return val > 0.0
+    if abs(rate) > 1e-13 * max(scale, 1e-300):
         return rate > 0.0
     # second derivative (g is affine in z and harmonic in t)
     zz = aff.rate2(t, np.asarray(z, float), r, phase)

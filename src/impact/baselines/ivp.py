@@ -39,7 +39,7 @@ from scipy.optimize import brentq
 
 from . import (
     Affine, ImpactLog, S_VEL, Functional, check_inputs, default_v_stick, free_affine,
-    impact_law, initial_state, leaves_now, make_result, merged_velocity, stuck_affine,
+    impact_law, initial_state, leaves_now, make_result, merged_velocity, near_zero, stuck_affine,
     stuck_exit_functionals, wall_gap,
 )
 from ..params import System
@@ -134,23 +134,28 @@ class Segments:
             specs.append((Functional(S_VEL), 0))
         all_events = []
         for g, direction in specs:
-            g0 = g(t0, z0, r, ph)
-            size = float(np.abs(g.w) @ np.abs(z0)) + abs(g.w0) + abs(g.wf)
-            if abs(g0) <= 1e-13 * size:
-                # starts at zero: pin the start value on the side it leaves towards
+            zero, _, rate = near_zero(g, t0, z0, aff, r, ph)
+            if zero:
+                # starts at zero (to round-off / event-time resolution): pin the start value
+                # on the side it is not crossing to, so scipy neither finds a root at t0 nor
+                # trips over an interpolant that is slightly off there (LSODA)
                 if direction:
                     at0 = -direction * 1e-300
                 else:
-                    at0 = math.copysign(1e-300, g.rate(t0, z0, aff, r, ph))
+                    at0 = math.copysign(1e-300, rate)
                 ev = make_event(g, r, ph, direction, t0, at0)
             else:
                 ev = make_event(g, r, ph, direction)
             all_events.append(ev)
         if graze:
             all_events[-1].terminal = False
-        sol = solve_ivp(rhs, (t0, self.t_end), np.asarray(z0, float), method=self.method,
-                        rtol=self.rtol, atol=self.atol, events=all_events or None,
-                        dense_output=True, **opts)
+        try:
+            sol = solve_ivp(rhs, (t0, self.t_end), z0, method=self.method,
+                            rtol=self.rtol, atol=self.atol, events=all_events or None,
+                            dense_output=True, **opts)
+        except ValueError as exc:  # scipy's event root bracket failed (interpolant off at a step start)
+            self.nfev += counter[0]
+            return t0, z0, None, f"{self.method} event location failed at t = {t0:.6g} ({exc})"
         self.nfev += counter[0]
         if sol.status == -1:
             return t0, np.asarray(z0, float), None, sol.message
