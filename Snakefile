@@ -17,11 +17,15 @@ if not config:
 validate(config, "workflow/schemas/config.schema.yaml")
 
 
+report: "workflow/report/workflow.rst"
+
+
 include: "workflow/rules/common.smk"
 include: "workflow/rules/sweeps.smk"
 include: "workflow/rules/tmd.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/tables.smk"
+include: "workflow/rules/report.smk"
 include: "workflow/rules/masri.smk"
 include: "workflow/rules/coexistence.smk"
 
@@ -31,5 +35,6 @@ rule all:
     input:
         figures=expand("results/figures/{fig}.{ext}", fig=FIGURES, ext=("png", "pdf")),
         table="results/tables/paper_vs_reproduced.csv",
+        report="results/report/index.html",
         masri=MASRI_OUTPUTS,
         coexistence=COEXISTENCE_OUTPUTS,

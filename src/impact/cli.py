@@ -157,6 +157,18 @@ def cmd_masri(args) -> dict:
     return out
 
 
+def cmd_verify_archive(args) -> dict:
+    """Re-check an archive against its manifest: exit 1 naming each differing entry on stderr."""
+    from .archive import archive_summary, check_archive
+
+    problems = check_archive(args.file)
+    for path, reason in problems:
+        print(f"{path}: {reason}", file=sys.stderr)
+    if problems:
+        raise SystemExit(1)
+    return archive_summary(args.file)
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="impact", description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.ArgumentDefaultsHelpFormatter)
@@ -186,6 +198,10 @@ def build_parser() -> argparse.ArgumentParser:
     ms.add_argument("--force-ratio", type=_ranged(0, 1e12, lo_open=True), default=DEFAULTS["force_ratio"],
                     help="F0/K")
     ms.set_defaults(func=cmd_masri)
+
+    va = sub.add_parser("verify-archive", help="re-check a study archive against its MANIFEST.json (exit 1 if any entry differs)")
+    va.add_argument("file", help="the archive, results/archive/impact-study-<commit>.tar.gz")
+    va.set_defaults(func=cmd_verify_archive)
     return ap
 
 

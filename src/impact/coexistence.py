@@ -18,7 +18,7 @@ import xarray as xr
 from . import _kernels as K
 from .params import Protocol, System
 from .simulate import sweep
-from .study import curve_id, curve_system, freq_grid, gap_grid, optimum
+from .study import curve_id, curve_system, freq_grid, gap_grid
 
 #: amplitude and AIPC tolerances that tell two attractors apart (window transients stay below)
 AMPLITUDE_RTOL = 1e-2
@@ -107,64 +107,3 @@ def ensemble_dataset(spec, members, gaps, r, amp, aipc, a_max) -> xr.Dataset:
     ds.attrs.update(curve=str(curve_id(spec)), a_max=a_max,
                     attractor_tolerances=f"amplitude rel {AMPLITUDE_RTOL}, AIPC abs {AIPC_ATOL}")
     return ds
-
-
-def coexistence_table(paper: dict, from_rest: dict, continuation: dict, ensembles: dict) -> pd.DataFrame:
-    """Per CID curve: X_m at the optimum gap for every mode and start, the envelope, the best match.
-
-    paper: curve id -> the paper's X_m; from_rest / ensembles: id -> dataset;
-    continuation: (id, mode) -> dataset.
-    """
-    rows = []
-    for cid, ds_rest in from_rest.items():
-        candidates = {}
-        for start in ds_rest["start"].values:
-            candidates[f"from_rest, start {start}"] = optimum(ds_rest, str(start))
-        for (cid2, mode), ds in continuation.items():
-            if cid2 == cid:
-                for start in ds["start"].values:
-                    candidates[f"{mode}, start {start}"] = optimum(ds, str(start))
-        ens = ensembles.get(cid)
-        row = {"curve": cid, "paper_X_m": paper.get(cid, math.nan)}
-        for name, (g, xm) in candidates.items():
-            row[f"X_m [{name}]"] = xm
-            row[f"g [{name}]"] = g
-        if ens is not None:
-            for stat in ("min", "median", "max"):
-                vals = ens[f"X_m_{stat}"].values
-                i = int(np.nanargmin(vals))
-                row[f"envelope {stat}: X_m at its optimum"] = float(vals[i])
-                row[f"envelope {stat}: g"] = float(ens["gap_ratio"].values[i])
-            row["most attractors at one (g, r)"] = int(ens["attractors"].max())
-        target = row["paper_X_m"]
-        if math.isfinite(target):
-            best = min(candidates.items(), key=lambda kv: abs(kv[1][1] - target))
-            row["closest to the paper"] = best[0]
-            row["closest X_m"] = best[1][1]
-            row["closest rel. difference"] = (best[1][1] - target) / target
-            if ens is not None:
-                row["paper within ensemble range"] = bool(
-                    np.nanmin(ens["X_m_min"].values) <= target <= np.nanmin(ens["X_m_max"].values))
-        rows.append(row)
-    return pd.DataFrame(rows)
-
-
-def e_trend_statement(table: pd.DataFrame, e_of: dict) -> str:
-    """Does any mode, start or the envelope give the paper's e-trend (X_m lowest at e = 0.45)?"""
-    curves = sorted((e_of[c], c) for c in table["curve"] if c in e_of)
-    if len(curves) < 3:
-        return "not enough restitution values in the study to judge the e-trend"
-    cols = [c for c in table.columns if c.startswith("X_m [") or (c.startswith("envelope") and c.endswith("optimum"))]
-    found = []
-    for col in cols:
-        vals = [float(table.loc[table["curve"] == cid, col].iloc[0]) for _, cid in curves]
-        if all(math.isfinite(v) for v in vals) and int(np.argmin(vals)) == 1:
-            name = col[len("X_m ["):-1] if col.startswith("X_m [") else col.replace(": X_m at its optimum", "")
-            found.append(f"{name}: " + "/".join(f"{v:.3f}" for v in vals))
-    es = "/".join(f"{e:g}" for e, _ in curves)
-    if found:
-        paper = "0.32/0.22/0.40" if es == "0.25/0.45/0.65" else "see the table"
-        return (f"X_m at the optimum gap is lowest at the middle e (e = {es}; paper {paper}) for: "
-                + "; ".join(found))
-    return (f"No sweep mode, start or ensemble statistic gives X_m lowest at the middle e (e = {es}): "
-            "the paper's e-trend is not explained by the initial condition or the sweep protocol here")

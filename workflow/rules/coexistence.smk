@@ -55,7 +55,12 @@ rule coexistence_figure:
         ensemble="results/coexistence/{curve}_ensemble.nc",
         library=LIB_PLOT,
     output:
-        png="results/figures/coexistence_{curve}.png",
+        png=report(
+            "results/figures/coexistence_{curve}.png",
+            caption="../report/coexistence_figure.rst",
+            category=snakemake_category("coexistence_"),
+            subcategory=snakemake_subcategory("coexistence_"),
+        ),
         pdf="results/figures/coexistence_{curve}.pdf",
     params:
         spec=lambda wc: CURVES[wc.curve],
@@ -80,7 +85,12 @@ rule hysteresis_figure:
         continuation=lambda wc: [f"results/coexistence/{wc.curve}_{m}.nc" for m in COEXISTENCE_MODES],
         library=LIB_PLOT + library("masri.py", "masri_check.py"),
     output:
-        png="results/figures/hysteresis_{curve}.png",
+        png=report(
+            "results/figures/hysteresis_{curve}.png",
+            caption="../report/hysteresis_figure.rst",
+            category=snakemake_category("hysteresis_"),
+            subcategory=snakemake_subcategory("hysteresis_"),
+        ),
         pdf="results/figures/hysteresis_{curve}.pdf",
     params:
         spec=lambda wc: CURVES[wc.curve],
@@ -106,9 +116,14 @@ rule coexistence_table:
         from_rest=[sweep_file(s) for s in COEXISTENCE_CURVES],
         continuation=[f"results/coexistence/{curve_id(s)}_{m}.nc" for s in COEXISTENCE_CURVES for m in COEXISTENCE_MODES],
         ensemble=[f"results/coexistence/{curve_id(s)}_ensemble.nc" for s in COEXISTENCE_CURVES],
-        library=library("coexistence.py", "comparison.py", "study.py", "pipeline.py"),
+        library=library("comparison.py", "study.py", "pipeline.py"),
     output:
-        table="results/tables/coexistence.csv",
+        table=report(
+            "results/tables/coexistence.csv",
+            caption="../report/coexistence.rst",
+            category=snakemake_category("coexistence"),
+            subcategory=snakemake_subcategory("coexistence"),
+        ),
         statement="results/tables/coexistence_e_trend.json",
     threads: 1
     resources:

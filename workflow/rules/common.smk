@@ -3,6 +3,9 @@
 import os
 
 from impact import comparison
+from impact.archive import archive_name
+from impact.provenance import git_state
+from impact.report import snakemake_category, snakemake_subcategory
 from impact.study import all_curves, check_config, curve_id, figure_curves, friction_scale
 
 check_config(config)
@@ -23,6 +26,11 @@ LIB_SWEEP = LIB_CORE + library("dataset.py", "study.py")
 LIB_TMD = library("tmd.py", "pipeline.py", "params.py")
 LIB_PLOT = library("plotting.py", "study.py", "pipeline.py")
 LIB_TABLE = library("comparison.py", "study.py", "pipeline.py")
+LIB_REPORT = library("report.py", "provenance.py", "pipeline.py")
+LIB_ARCHIVE = library("archive.py", "report.py", "provenance.py", "pipeline.py")
+
+# one archive per commit, "-dirty" when the source tree has uncommitted changes
+ARCHIVE = f"results/archive/{archive_name(git_state()['git_commit'], git_state()['git_dirty'])}"
 
 
 # stages that run only when configured
@@ -70,3 +78,40 @@ def table_curves(wildcards):
     """The curves the paper's reported values refer to, where the study has them."""
     wanted = {curve_id(s) for s in comparison.needed_curves()}
     return [sweep_file(spec) for cid, spec in CURVES.items() if cid in wanted]
+
+
+def executor_name(wildcards):
+    """The executor this Snakemake was started with (local, slurm, ...), for the report."""
+    plugin = workflow.executor_plugin
+    return plugin.name if plugin is not None else "unknown"
+
+
+def report_benchmarks():
+    """The benchmark file of every job of the study, for the report's run times."""
+    files = [f"results/benchmarks/sweep_curve/{c}.tsv" for c in CURVES]
+    files += [f"results/benchmarks/figure/{fig}.tsv" for fig in FIGURES]
+    files += ["results/benchmarks/tmd_optimum.tsv", "results/benchmarks/paper_vs_reproduced.tsv"]
+    if MASRI_OUTPUTS:
+        rules_ = ("masri_check", "masri_chart", "masri_branches", "masri_figures")
+        files += [f"results/benchmarks/{r}.tsv" for r in rules_]
+    for spec in COEXISTENCE_CURVES:
+        c = curve_id(spec)
+        files += [f"results/benchmarks/continuation_curve/{c}_{m}.tsv" for m in COEXISTENCE_MODES]
+        rules_ = ("ensemble_curve", "coexistence_figure", "hysteresis_figure")
+        files += [f"results/benchmarks/{r}/{c}.tsv" for r in rules_]
+    if COEXISTENCE_CURVES:
+        files.append("results/benchmarks/coexistence_table.tsv")
+    return files
+
+
+def archive_extras():
+    """Outputs of the stages that run only when configured (datasets, figures, tables), for the archive."""
+    files = list(MASRI_OUTPUTS + COEXISTENCE_OUTPUTS)
+    files += [f"{f[:-4]}.pdf" for f in files if f.startswith("results/figures/") and f.endswith(".png")]
+    if MASRI_OUTPUTS:
+        files += [f"results/checks/{name}.nc" for name in ("masri", "masri_chart", "masri_branches")]
+    for spec in COEXISTENCE_CURVES:
+        files += [f"results/coexistence/{curve_id(spec)}_{m}.nc" for m in [*COEXISTENCE_MODES, "ensemble"]]
+    if COEXISTENCE_CURVES:
+        files.append("results/tables/coexistence_e_trend.json")
+    return files

@@ -7,7 +7,12 @@ rule figure:
         tmd=lambda wc: ["results/tables/tmd_optimum.json"] if needs_tmd(wc.fig) else [],
         library=LIB_PLOT,
     output:
-        png="results/figures/{fig}.png",
+        png=report(
+            "results/figures/{fig}.png",
+            caption="../report/figure.rst",
+            category=lambda wc: snakemake_category(wc.fig),
+            subcategory=lambda wc: snakemake_subcategory(wc.fig),
+        ),
         pdf="results/figures/{fig}.pdf",
     params:
         figure=lambda wc: config["figures"][wc.fig],

@@ -7,7 +7,12 @@ rule masri_check:
         library=LIB_CORE + library("masri.py", "masri_check.py"),
     output:
         dataset="results/checks/masri.nc",
-        table="results/tables/masri_check.csv",
+        table=report(
+            "results/tables/masri_check.csv",
+            caption="../report/masri_check.rst",
+            category=snakemake_category("masri_check"),
+            subcategory=snakemake_subcategory("masri_check"),
+        ),
         summary="results/checks/masri_summary.json",
     params:
         grid=config["masri"]["grid"],
@@ -77,9 +82,19 @@ rule masri_figures:
         branches="results/checks/masri_branches.nc",
         library=LIB_PLOT,
     output:
-        chart_png="results/figures/masri_stability.png",
+        chart_png=report(
+            "results/figures/masri_stability.png",
+            caption="../report/masri_stability.rst",
+            category=snakemake_category("masri_stability"),
+            subcategory=snakemake_subcategory("masri_stability"),
+        ),
         chart_pdf="results/figures/masri_stability.pdf",
-        branches_png="results/figures/masri_branches.png",
+        branches_png=report(
+            "results/figures/masri_branches.png",
+            caption="../report/masri_branches.rst",
+            category=snakemake_category("masri_branches"),
+            subcategory=snakemake_subcategory("masri_branches"),
+        ),
         branches_pdf="results/figures/masri_branches.pdf",
     threads: 1
     resources:

@@ -7,7 +7,12 @@ rule paper_vs_reproduced:
         tmd="results/tables/tmd_optimum.json",
         library=LIB_TABLE,
     output:
-        "results/tables/paper_vs_reproduced.csv",
+        report(
+            "results/tables/paper_vs_reproduced.csv",
+            caption="../report/paper_vs_reproduced.rst",
+            category=snakemake_category("paper_vs_reproduced"),
+            subcategory=snakemake_subcategory("paper_vs_reproduced"),
+        ),
     threads: 1
     resources:
         runtime=5, mem_mb=1000,

@@ -5,7 +5,12 @@ rule tmd_optimum:
     input:
         library=LIB_TMD,
     output:
-        "results/tables/tmd_optimum.json",
+        report(
+            "results/tables/tmd_optimum.json",
+            caption="../report/tmd_optimum.rst",
+            category=snakemake_category("tmd_optimum"),
+            subcategory=snakemake_subcategory("tmd_optimum"),
+        ),
     params:
         mu=config["tmd"]["mu"],
         beta=config["structure"]["beta"],

@@ -3,8 +3,7 @@ import json
 
 import xarray as xr
 
-from impact.coexistence import coexistence_table, e_trend_statement
-from impact.comparison import X_M_AT_OPTIMUM
+from impact.comparison import X_M_AT_OPTIMUM, coexistence_table, e_trend_statement
 from impact.pipeline import logged, write_csv_atomic, write_json_atomic
 from impact.study import curve_id
 

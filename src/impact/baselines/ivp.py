@@ -190,7 +190,8 @@ class Segments:
             if te >= t_stop:
                 break
             for g, index in graze:
-                if g(te, ye, r, ph) <= 0.0:
+                size = float(np.abs(g.w) @ np.abs(ye)) + abs(g.w0)
+                if g(te, ye, r, ph) <= 1e-12 * size:  # no excursion beyond round-off
                     continue
                 # last step point before the extremum is inside (else the event would have fired)
                 k = int(np.searchsorted(sol.t, te, side="right")) - 1

@@ -30,8 +30,8 @@ import math
 import numpy as np
 
 from . import (
-    ImpactLog, S_VEL, Functional, check_inputs, default_v_stick, free_affine, initial_state, leaves_now, make_result,
-    merged_velocity, stuck_affine, stuck_exit_functionals, wall_gap,
+    ImpactLog, S_VEL, Functional, check_inputs, default_v_stick, free_affine, initial_state,
+    leaves_now, make_result, merged_velocity, stuck_affine, stuck_exit_functionals, wall_gap,
 )
 from .ivp import MAX_IDLE_PHASES, Segments
 from ..params import System
