@@ -28,6 +28,8 @@ include: "workflow/rules/tables.smk"
 include: "workflow/rules/report.smk"
 include: "workflow/rules/masri.smk"
 include: "workflow/rules/coexistence.smk"
+include: "workflow/rules/validation.smk"
+include: "workflow/rules/numerics.smk"
 
 
 rule all:
@@ -38,3 +40,5 @@ rule all:
         report="results/report/index.html",
         masri=MASRI_OUTPUTS,
         coexistence=COEXISTENCE_OUTPUTS,
+        validation=VALIDATION_OUTPUTS,
+        numerics=NUMERICS_OUTPUTS,

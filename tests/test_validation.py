@@ -126,3 +126,21 @@ def test_run_validation_smoke_writes_everything(cfg, tmp_path):
     assert recs and all(r.synthetic for r in recs)
     assert {r.header["source"].split(":")[0] for r in recs} >= {"model", "virtual rig (impact.experiment.rig)"}
     assert not list(tmp_path.rglob("*.tmp"))
+
+
+def test_config_is_checked_and_the_shipped_yaml_matches_the_defaults():
+    with pytest.raises(ValueError, match="unknown key"):
+        V.validation_config({"protocl": {}})
+    with pytest.raises(ValueError, match="sensor"):
+        V.validation_config({"sensor": {"nosie_mm": 0.1}})
+    with pytest.raises(ValueError, match="grid wall"):
+        V.validation_config({"grid": {"walls": ["glass"]}})
+    from pathlib import Path
+
+    import yaml
+
+    path = Path(__file__).resolve().parents[1] / "config" / "validation.yaml"
+    if not path.exists():
+        pytest.skip("config/validation.yaml not present")
+    cfg = V.validation_config(yaml.safe_load(path.read_text()))
+    assert cfg["grid"] and len(V.all_cases(cfg)) == 108

@@ -205,3 +205,62 @@ def plot_hysteresis(spec: dict, continuation: dict, from_rest, branches, gap_rat
     for out in outputs:
         save_atomic(fig, out)
     plt.close(fig)
+
+
+def plot_work_precision(ds, footer: str, outputs, error: str = "amplitude_error") -> None:
+    """Error against wall time, log-log, one panel per case, one line per integrator."""
+    cases = list(ds["case"].values)
+    ncols = 2
+    nrows = int(np.ceil(len(cases) / ncols))
+    fig, axes = plt.subplots(nrows, ncols, figsize=(6.4 * ncols, 4.4 * nrows), squeeze=False)
+    markers = dict(zip(ds["integrator"].values, "*osD^v<>ph"))
+    floor = 1e-17  # exact agreement is drawn at the floor instead of vanishing on a log axis
+    for ax, case in zip(axes.flat, cases):
+        for integ in ds["integrator"].values:
+            t = ds["wall_time"].sel(case=case, integrator=integ).values
+            e = ds[error].sel(case=case, integrator=integ).values
+            ok = np.isfinite(t) & np.isfinite(e)
+            if not ok.any():
+                continue
+            style = dict(ms=10, color="k") if integ == "core" else dict(ms=5)
+            ax.loglog(t[ok], np.maximum(e[ok], floor), "-" + markers.get(integ, "o"), label=str(integ), **style)
+        horizon = float(ds["predictability_horizon"].sel(case=case))
+        title = str(case) + (f" (inside predictability horizon t < {horizon:.0f})" if np.isfinite(horizon) else "")
+        ax.set_title(title, fontsize=9)
+        ax.set_xlabel("wall time per run [s] (min of repeats)")
+        ax.set_ylabel(f"{error.replace('_', ' ')} vs exact core")
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=7)
+    for ax in list(axes.flat)[len(cases):]:
+        ax.set_visible(False)
+    fig.text(0.01, 0.005, footer, fontsize=6.5, va="bottom")
+    fig.tight_layout(rect=(0, 0.03, 1, 1))
+    for out in outputs:
+        save_atomic(fig, out)
+    plt.close(fig)
+
+
+def plot_stability_map(table, outputs) -> None:
+    """Heat map case x method: ok, finished with a non-finite result, or failed (annotated)."""
+    cases = list(dict.fromkeys(table["case"]))
+    methods = list(dict.fromkeys(table["method"]))
+    grid = np.zeros((len(cases), len(methods)))
+    fig, ax = plt.subplots(figsize=(1.2 * len(methods) + 3, 0.45 * len(cases) + 2))
+    for _, row in table.iterrows():
+        i, j = cases.index(row["case"]), methods.index(row["method"])
+        failed = not str(row["status"]).startswith("ok")
+        grid[i, j] = 2 if failed else (0 if row["finite"] else 1)
+        pen = row.get("max_penetration", np.nan)
+        label = "failed" if failed else (f"pen {pen:.0e}" if np.isfinite(pen) and pen > 0 else "ok")
+        ax.text(j, i, label, ha="center", va="center", fontsize=6)
+    from matplotlib.colors import ListedColormap
+
+    ax.imshow(grid, cmap=ListedColormap(["#a6dba0", "#fdb863", "#e66101"]), vmin=0, vmax=2, aspect="auto")
+    ax.set_xticks(range(len(methods)), methods, rotation=30, ha="right", fontsize=8)
+    ax.set_yticks(range(len(cases)), cases, fontsize=8)
+    ax.set_title("Extreme cases: green ok, orange non-finite, red failed (largest penetration beyond a wall)",
+                 fontsize=9)
+    fig.tight_layout()
+    for out in outputs:
+        save_atomic(fig, out)
+    plt.close(fig)

@@ -46,6 +46,16 @@ MASRI_OUTPUTS = (
 )
 
 
+NUMERICS_OUTPUTS = (
+    ["results/figures/numerics_error_runtime.png", "results/tables/numerics_stability.csv",
+     "results/tables/numerics_speed.csv"]
+    if "numerics" in config
+    else []
+)
+
+VALIDATION = config.get("validation", {})
+VALIDATION_OUTPUTS = ["results/validation/validation_table.csv"] if VALIDATION else []
+
 COEXISTENCE_CURVES = config.get("coexistence", {}).get("curves", [])
 COEXISTENCE_MODES = config.get("coexistence", {}).get("modes", ["continuation_up", "continuation_down"])
 COEXISTENCE_OUTPUTS = (
@@ -101,6 +111,11 @@ def report_benchmarks():
         files += [f"results/benchmarks/{r}/{c}.tsv" for r in rules_]
     if COEXISTENCE_CURVES:
         files.append("results/benchmarks/coexistence_table.tsv")
+    if NUMERICS_OUTPUTS:
+        files += [f"results/benchmarks/{r}.tsv" for r in ("numerics_work_precision", "numerics_stability",
+                                                          "numerics_figures")]
+    if VALIDATION:
+        files.append("results/benchmarks/cross_validation.tsv")
     return files
 
 
@@ -114,4 +129,10 @@ def archive_extras():
         files += [f"results/coexistence/{curve_id(spec)}_{m}.nc" for m in [*COEXISTENCE_MODES, "ensemble"]]
     if COEXISTENCE_CURVES:
         files.append("results/tables/coexistence_e_trend.json")
+    if NUMERICS_OUTPUTS:
+        files += NUMERICS_OUTPUTS + ["results/numerics/work_precision.nc", "results/figures/numerics_stability_map.png"]
+    if VALIDATION:
+        files += [f"results/validation/{f}" for f in ("validation_table.csv", "validation_curves.csv",
+                                                       "validation_delta.csv", "drop_tests.csv", "claims.json",
+                                                       "fig3.png", "fig5.png")]
     return files

@@ -6,12 +6,20 @@ rule report:
         figures=[
             *expand("results/figures/{fig}.png", fig=FIGURES),
             *[f for f in MASRI_OUTPUTS + COEXISTENCE_OUTPUTS if f.startswith("results/figures/")],
+            *(["results/validation/fig3.png", "results/validation/fig5.png"] if VALIDATION else []),
+            *(["results/figures/numerics_stability_map.png"] if NUMERICS_OUTPUTS else []),
         ],
         paper_vs_reproduced="results/tables/paper_vs_reproduced.csv",
         tmd_optimum="results/tables/tmd_optimum.json",
         masri_check=[f for f in MASRI_OUTPUTS if f.endswith("masri_check.csv")],
         masri_summary=[f for f in MASRI_OUTPUTS if f.endswith("masri_summary.json")],
         coexistence=[f for f in COEXISTENCE_OUTPUTS if f.endswith("coexistence.csv")],
+        tables=(["results/tables/coexistence_e_trend.json"] if COEXISTENCE_CURVES else [])
+        + (["results/validation/claims.json"] if VALIDATION else [])
+        + (["results/tables/numerics_speed.csv"] if NUMERICS_OUTPUTS else []),
+        cross_validation=VALIDATION_OUTPUTS,
+        numerics_stability=[f for f in NUMERICS_OUTPUTS if f.endswith("numerics_stability.csv")],
+        numerics_error_runtime=[f for f in NUMERICS_OUTPUTS if f.endswith("numerics_error_runtime.png")],
         # every job's run time: a job that reruns updates its benchmark, and the report follows
         benchmarks=report_benchmarks(),
         library=LIB_REPORT,

@@ -126,8 +126,34 @@ def initial_state(system: System, start: str) -> tuple[np.ndarray, int]:
     return np.array([0.0, 0.0, side * 0.5 * system.gap, 0.0]), side
 
 
+#: default flight height (relative to |x| + d/2) below which a rebound is merged: a flight
+#: that low is below the position resolution of integrators that carry x and y separately
+H_STICK = 1e-10
+
+
 def default_v_stick(system: System, v_stick) -> float:
     return V_STICK * system.force_ratio if v_stick is None else float(v_stick)
+
+
+def rebound_negligible(system: System, r: float, t: float, z, side: int, v_stick: float,
+                       h_stick: float = H_STICK) -> bool:
+    """Is the rebound (post-impact state z at wall `side`) too slow or too low to resolve?
+
+    True if |s'| < v_stick, or if the relative acceleration drives the mass back to
+    the wall and the flight height s'^2 / (2 |s''|) is below h_stick * (|x| + d/2).
+    """
+    z = np.asarray(z, float)
+    v = z[3] - z[1]
+    if abs(v) < v_stick:
+        return True
+    if side * v >= 0.0:
+        return False
+    sf = math.copysign(1.0, v) if system.friction_accel > 0.0 else 0.0
+    acc = free_affine(system, sf).rate(t, z, r, system.phase)
+    a = acc[3] - acc[1]
+    if side * a <= 0.0:
+        return False
+    return v * v / (2.0 * abs(a)) < h_stick * (abs(z[0]) + 0.5 * system.gap)
 
 
 # ----------------------------------------------------------------------------------------------

@@ -17,7 +17,8 @@ the method; it needs dt small compared with the shortest flight).
 Other switching events (end of sliding s' = 0, release of a stuck mass when the
 contact / friction force it needs changes sign) are located by regula falsi
 (Illinois) on redone partial RK4 steps.  Chatter / e = 0 as in
-:mod:`impact.baselines.ivp`: rebounds slower than ``v_stick`` merge the masses.
+:mod:`impact.baselines.ivp`: rebounds slower than ``v_stick`` or lower than
+``h_stick * (|x| + d/2)`` merge the masses.
 
 Amplitude: trapezoid rule on x^2 at the step points over the window (a step
 straddling t_window is cut with x interpolated linearly): second order in dt,
@@ -32,8 +33,9 @@ import math
 import numpy as np
 
 from . import (
-    Affine, ImpactLog, TrapzWindow, check_inputs, default_v_stick, free_affine, impact_law,
-    initial_state, leaves_now, make_result, merged_velocity, stuck_affine, stuck_exit_functionals,
+    H_STICK, Affine, ImpactLog, TrapzWindow, check_inputs, default_v_stick, free_affine, impact_law,
+    initial_state, leaves_now, make_result, merged_velocity, rebound_negligible, stuck_affine,
+    stuck_exit_functionals,
 )
 from ..params import System
 
@@ -173,12 +175,14 @@ def locate(fun, h: float, f0: float, fh: float, tol: float) -> float:
 
 
 def simulate_rk4(system: System, r: float, t_end: float, t_window: float, start: str = "centre", *,
-                 dt: float, max_impacts: int = 10 ** 6, v_stick: float | None = None):
+                 dt: float, max_impacts: int = 10 ** 6, v_stick: float | None = None,
+                 h_stick: float = H_STICK):
     """Fixed-step RK4 with Hermite-interpolated impact location (see the module docstring).
 
     dt          step size (model time units)
     max_impacts cap on impacts (plus merges); exceeding it fails the run
     v_stick     rebound speed below which the masses merge (default 1e-7 * force_ratio)
+    h_stick     rebounds flying less high than h_stick * (|x| + d/2) also merge (default 1e-10)
     """
     check_inputs(system, r, t_end, t_window, start)
     dt = float(dt)
@@ -349,7 +353,7 @@ def simulate_rk4(system: System, r: float, t_end: float, t_window: float, start:
             exits = None
             continue
         xd2, yd2 = impact_law(mu, e, xd, yd)
-        if abs(yd2 - xd2) < v_stick:
+        if rebound_negligible(system, r, t, (x, xd2, y, yd2), wside, v_stick, h_stick):
             xd2 = yd2 = merged_velocity(mu, xd, yd)
             mode = ("stick", wside)
             exits = None

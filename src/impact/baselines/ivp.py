@@ -14,7 +14,9 @@ stuck         both masses move as one (M + m); events: the contact force needed
               bound (interior stick, friction only).
 
 Chatter and e = 0 are handled pragmatically: a rebound with relative speed below
-``v_stick`` (default 1e-7 * force_ratio) merges the masses (momentum-conserving,
+``v_stick`` (default 1e-7 * force_ratio), or whose flight would rise less than
+``h_stick * (|x| + d/2)`` (default 1e-10: below the position resolution of x and y
+carried separately), merges the masses (momentum-conserving,
 i.e. a plastic impact) into the stuck phase, which ends when the wall would
 have to pull.  A fresh flight after a slow rebound starts with a first step of
 a quarter of the predicted flight time, so the return to the wall cannot hide
@@ -39,7 +41,8 @@ from scipy.optimize import brentq
 
 from . import (
     Affine, ImpactLog, S_VEL, Functional, check_inputs, default_v_stick, free_affine,
-    impact_law, initial_state, leaves_now, make_result, merged_velocity, near_zero, stuck_affine,
+    H_STICK, impact_law, initial_state, leaves_now, make_result, merged_velocity, near_zero,
+    rebound_negligible, stuck_affine,
     stuck_exit_functionals, wall_gap,
 )
 from ..params import System
@@ -52,12 +55,15 @@ MAX_IDLE_PHASES = 200
 
 
 def make_event(g: Functional, r: float, phase: float, direction: int, t0: float | None = None,
-               at_t0: float = 0.0):
+               z0=None, at_t0: float = 0.0):
     """A scipy event function g(t, z) with terminal / direction attributes.
 
-    With t0 given the function returns ``at_t0`` for t <= t0: used for events that
-    start exactly at zero, so that scipy neither reports a root at the start of
-    the phase nor trips over an interpolant that is off there (LSODA).
+    With t0, z0 given (an event that starts at zero to within round-off) the function is
+    shifted by its start value, so it starts exactly at zero, and returns ``at_t0``
+    (a tiny number on the side it is not crossing to) for t <= t0: scipy then
+    neither reports a root at the start of the phase, nor finds a spurious sign
+    change in the round-off right after it, nor trips over an interpolant that is
+    slightly off at the step start (LSODA).
     """
     w0, w1, w2, w3 = (float(v) for v in g.w)
     c0, cf = float(g.w0), float(g.wf)
@@ -67,10 +73,15 @@ def make_event(g: Functional, r: float, phase: float, direction: int, t0: float 
         def event(t, z):
             return w0 * z[0] + w1 * z[1] + w2 * z[2] + w3 * z[3] + c0 + cf * sin(r * t + phase)
     else:
+        def value(t, z):
+            return w0 * z[0] + w1 * z[1] + w2 * z[2] + w3 * z[3] + c0 + cf * sin(r * t + phase)
+
+        event_shift = value(t0, z0)
+
         def event(t, z):
             if t <= t0:
                 return at_t0
-            return w0 * z[0] + w1 * z[1] + w2 * z[2] + w3 * z[3] + c0 + cf * sin(r * t + phase)
+            return value(t, z) - event_shift
 
     event.terminal = True
     event.direction = direction
@@ -107,9 +118,9 @@ class Segments:
         events: [(g, direction)] with g a :class:`Functional`; all terminal.
         graze: [(g, index)] wall functionals g (event ``events[index]``, direction +1)
         whose brief excursions above zero inside a single solver step must not be
-        missed: a non-terminal event on the extrema of s (s' = 0) checks g there,
-        and a positive extremum is traced back, on the dense output, to the
-        crossing before it, which then ends the phase as event ``index``.
+        missed: at each extremum of s inside a step g is checked, and a positive
+        extremum is traced back, on the dense output, to the crossing before it,
+        which then ends the phase as event ``index`` (see :meth:`_missed_crossing`).
 
         Returns (t, z, fired, message): fired is the index of the event that ended
         the phase (None at t_end); message is None or the solver's failure message.
@@ -130,8 +141,6 @@ class Segments:
         if first_step is not None:
             opts["first_step"] = min(float(first_step), self.t_end - t0)
         specs = list(events)
-        if graze:
-            specs.append((Functional(S_VEL), 0))
         all_events = []
         for g, direction in specs:
             zero, _, rate = near_zero(g, t0, z0, aff, r, ph)
@@ -143,12 +152,10 @@ class Segments:
                     at0 = -direction * 1e-300
                 else:
                     at0 = math.copysign(1e-300, rate)
-                ev = make_event(g, r, ph, direction, t0, at0)
+                ev = make_event(g, r, ph, direction, t0, z0, at0)
             else:
                 ev = make_event(g, r, ph, direction)
             all_events.append(ev)
-        if graze:
-            all_events[-1].terminal = False
         try:
             sol = solve_ivp(rhs, (t0, self.t_end), z0, method=self.method,
                             rtol=self.rtol, atol=self.atol, events=all_events or None,
@@ -181,30 +188,61 @@ class Segments:
         return t_stop, z_stop, fired, None
 
     def _missed_crossing(self, sol, graze, t_stop):
-        """Earliest wall crossing hidden inside one step (found from an extremum of s)."""
-        te_all = sol.t_events[-1]
-        ye_all = sol.y_events[-1]
-        best = None
+        """Earliest wall crossing hidden inside one solver step.
+
+        For every step before t_stop in which s' changes sign (s has an extremum),
+        the extremum is located on the dense output; if a wall functional is
+        positive there (beyond round-off), the crossing before it is found by brentq.
+        Done here rather than as a scipy event, whose root bracketing fails on
+        LSODA's interpolant when s' is near zero at a step start.
+        """
+        ts = sol.t
+        sp = sol.y[3] - sol.y[1]
         r, ph = self.r, self.phase
-        for te, ye in zip(te_all, ye_all):
-            if te >= t_stop:
+        interp = sol.sol
+
+        def sdot(tt):
+            zz = interp(tt)
+            return zz[3] - zz[1]
+
+        for i in range(len(ts) - 1):
+            a = float(ts[i])
+            if a >= t_stop:
                 break
+            b = min(float(ts[i + 1]), t_stop)
+            if b <= a or sp[i] * sp[i + 1] > 0.0 or (sp[i] == 0.0 and sp[i + 1] == 0.0):
+                continue
+            fa, fb = sdot(a), sdot(b)
+            if fa * fb < 0.0:
+                te = brentq(sdot, a, b, xtol=1e-15 * max(1.0, abs(b)))
+            else:  # interpolant off at an end: sample the step instead
+                grid = np.linspace(a, b, 17)
+                te = None
+            best = None
             for g, index in graze:
-                size = float(np.abs(g.w) @ np.abs(ye)) + abs(g.w0)
-                if g(te, ye, r, ph) <= 1e-12 * size:  # no excursion beyond round-off
+                if te is None:
+                    vals = [g(tt, interp(tt), r, ph) for tt in grid]
+                    k = int(np.argmax(vals))
+                    tk, gk = float(grid[k]), vals[k]
+                else:
+                    tk = te
+                    gk = g(te, interp(te), r, ph)
+                zk = interp(tk)
+                size = float(np.abs(g.w) @ np.abs(zk)) + abs(g.w0)
+                if gk <= 1e-12 * size:  # no excursion beyond round-off
                     continue
-                # last step point before the extremum is inside (else the event would have fired)
-                k = int(np.searchsorted(sol.t, te, side="right")) - 1
-                a = float(sol.t[max(k, 0)])
-                fun = lambda tt: g(tt, sol.sol(tt), r, ph)  # noqa: E731
-                if fun(a) > 0.0 or a >= te:
+
+                def fun(tt, g=g):
+                    return g(tt, interp(tt), r, ph)
+
+                if fun(a) > 0.0 or tk <= a:
                     continue
-                root = brentq(fun, a, float(te), xtol=1e-15 * max(1.0, abs(te)), rtol=4 * np.finfo(float).eps)
+                root = brentq(fun, a, tk, xtol=1e-15 * max(1.0, abs(tk)), rtol=4 * np.finfo(float).eps)
                 if best is None or root < best[0]:
                     best = (root, index)
             if best is not None:
-                break
-        return best
+                return best
+        return None
 
     def _quadrature(self, sol, t_stop):
         ts = sol.t
@@ -237,13 +275,14 @@ def flight_first_step(system: System, aff: Affine, t: float, z, r: float, side: 
 
 def simulate_ivp(system: System, r: float, t_end: float, t_window: float, start: str = "centre", *,
                  method: str = "DOP853", rtol: float = 1e-10, atol=None, max_impacts: int = 10 ** 6,
-                 v_stick: float | None = None):
+                 v_stick: float | None = None, h_stick: float = H_STICK):
     """Event-driven solve_ivp baseline (see the module docstring).
 
     method      'RK45', 'DOP853', 'Radau', 'LSODA' (also 'BDF', 'RK23')
     rtol, atol  solve_ivp tolerances; atol defaults to rtol * force_ratio
     max_impacts cap on wall impacts (plus merges); exceeding it fails the run
     v_stick     rebound speed below which the masses merge (default 1e-7 * force_ratio)
+    h_stick     rebounds flying less high than h_stick * (|x| + d/2) also merge (default 1e-10)
     """
     check_inputs(system, r, t_end, t_window, start)
     seg = Segments(system, r, t_end, t_window, method, rtol, atol)
@@ -345,7 +384,7 @@ def simulate_ivp(system: System, r: float, t_end: float, t_window: float, start:
             continue
         pre = (z[1], z[3])
         xd, yd = impact_law(mu, e, z[1], z[3])
-        if abs(yd - xd) < v_stick:
+        if rebound_negligible(system, r, t, (z[0], xd, z[2], yd), wside, v_stick, h_stick):
             vc = merged_velocity(mu, z[1], z[3])
             xd = yd = vc
             mode = ("stick", wside)

@@ -271,13 +271,13 @@ def wall_contact(cfg: dict, wall: str, ball_radius_m: float) -> Wall:
     law = spec.get("law", "hertz")
     scale = float(cfg["contact"].get("stiffness_scale", 1.0))
     if law == "hertz":
-        eb, nb = cfg["balls"]["youngs_modulus_pa"], cfg["balls"]["poisson"]
-        ew, nw = spec["youngs_modulus_pa"], spec["poisson"]
+        eb, nb = float(cfg["balls"]["youngs_modulus_pa"]), float(cfg["balls"]["poisson"])
+        ew, nw = float(spec["youngs_modulus_pa"]), float(spec["poisson"])
         e_star = 1.0 / ((1 - nb**2) / eb + (1 - nw**2) / ew)
         k, n, thick = 4.0 / 3.0 * e_star * math.sqrt(ball_radius_m), 1.5, math.inf
     elif law == "layer":
-        thick = spec["thickness_mm"] * 1e-3
-        k, n = math.pi * ball_radius_m * spec["layer_modulus_pa"] / thick, 2.0
+        thick = float(spec["thickness_mm"]) * 1e-3
+        k, n = math.pi * ball_radius_m * float(spec["layer_modulus_pa"]) / thick, 2.0
     elif law == "power":
         k, n, thick = float(spec["k"]), float(spec["n"]), math.inf
     else:
@@ -783,11 +783,33 @@ def energy(spec: RigSpec, z, t_wall_pen: float | None = None) -> float:
     return kin + pot
 
 
+_WARM = False
+
+
 def warm_up() -> None:
-    """Compile (or load from numba's cache) the rig kernel."""
-    spec = rig_spec(mu=0.0129, gap_mm=30.0, rp=1.0, wall="steel")
-    run(spec, 1.0, 0.05, np.array([0.0, 0.01]), state=[0.0, 0.0, 0.3, 0.0], max_episodes=1)
-    _drop_contact(0.1, 1.0, 1e9, 1.5, 0.5, 1e-3, 1.0, 9.8, 0.0)
+    """Compile (or load from numba's on-disk cache) the rig kernels.
+
+    Under the same exclusive file lock as :func:`impact.simulate.ensure_compiled`,
+    so that processes starting together never write the cache at once.
+    """
+    global _WARM
+    if _WARM:
+        return
+    import fcntl
+
+    from ..simulate import _cache_dir
+
+    folder = _cache_dir()
+    folder.mkdir(parents=True, exist_ok=True)
+    with open(folder / "impact-jit.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            spec = rig_spec(mu=0.0129, gap_mm=30.0, rp=1.0, wall="steel")
+            run(spec, 1.0, 0.05, np.array([0.0, 0.01]), state=[0.0, 0.0, 0.3, 0.0], max_episodes=1)
+            _drop_contact(0.1, 1.0, 1e9, 1.5, 0.5, 1e-3, 1.0, 9.8, 0.0)
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
+    _WARM = True
 
 
 # ----------------------------------------------------------------------------
@@ -832,7 +854,10 @@ def describe(spec: RigSpec) -> str:
         parts += [f"m={spec.m:.4g} kg", f"L={spec.L * 1e3:.2f} mm", f"I_c={spec.I_c:.3g} kg m2",
                   f"pendulum {'nonlinear' if spec.nonlinear else 'linearised'}",
                   f"contact k={spec.wall.k:.3g} n={spec.wall.n:g} chi={spec.wall.chi:.4g}"]
-    parts.append(f"sensor {'+-%g mm, noise %g mm' % (spec.range_m * 1e3, spec.noise_m * 1e3) if spec.sensor else 'ideal'}")
+    if spec.sensor:
+        parts.append(f"sensor +-{spec.range_m * 1e3:g} mm, noise {spec.noise_m * 1e3:g} mm rms")
+    else:
+        parts.append("sensor ideal")
     return "virtual rig; " + "; ".join(parts)
 
 

@@ -1,0 +1,78 @@
+# Numerics shown, not assumed: every integrator's error against its run time,
+# and stability on stiff and extreme cases.
+
+
+rule numerics_work_precision:
+    input:
+        library=LIB_CORE + library("numerics.py", "baselines/__init__.py", "baselines/ivp.py",
+                                   "baselines/fixed_step.py", "baselines/moreau.py", "baselines/penalty.py"),
+    output:
+        dataset="results/numerics/work_precision.nc",
+        speed="results/tables/numerics_speed.csv",
+    params:
+        numerics=config.get("numerics", {}),
+    threads: 1
+    resources:
+        runtime=60, mem_mb=2000,
+    conda:
+        ENV
+    log:
+        "results/logs/numerics_work_precision.log",
+    benchmark:
+        "results/benchmarks/numerics_work_precision.tsv"
+    script:
+        "../scripts/numerics_work_precision.py"
+
+
+rule numerics_stability:
+    input:
+        library=LIB_CORE + library("numerics.py", "baselines/__init__.py", "baselines/ivp.py",
+                                   "baselines/fixed_step.py", "baselines/moreau.py", "baselines/penalty.py"),
+    output:
+        table=report(
+            "results/tables/numerics_stability.csv",
+            caption="../report/numerics_stability.rst",
+            category="Numerics",
+            subcategory="Stability on extreme cases",
+        ),
+    params:
+        numerics=config.get("numerics", {}),
+    threads: 1
+    resources:
+        runtime=60, mem_mb=2000,
+    conda:
+        ENV
+    log:
+        "results/logs/numerics_stability.log",
+    benchmark:
+        "results/benchmarks/numerics_stability.tsv"
+    script:
+        "../scripts/numerics_stability.py"
+
+
+rule numerics_figures:
+    input:
+        dataset="results/numerics/work_precision.nc",
+        stability="results/tables/numerics_stability.csv",
+        library=LIB_PLOT + library("provenance.py"),
+    output:
+        work_png=report(
+            "results/figures/numerics_error_runtime.png",
+            caption="../report/numerics_error_runtime.rst",
+            category="Numerics",
+            subcategory="Error against run time",
+        ),
+        work_pdf="results/figures/numerics_error_runtime.pdf",
+        map_png="results/figures/numerics_stability_map.png",
+        map_pdf="results/figures/numerics_stability_map.pdf",
+    threads: 1
+    resources:
+        runtime=5, mem_mb=1000,
+    conda:
+        ENV
+    log:
+        "results/logs/numerics_figures.log",
+    benchmark:
+        "results/benchmarks/numerics_figures.tsv"
+    script:
+        "../scripts/plot_numerics.py"
