@@ -21,7 +21,7 @@ import xarray as xr
 
 from .masri import forced_flow, masri_2eipc, orbit_initial_state
 from .params import Protocol, System, a_max
-from .simulate import FREE_FLIGHT, simulate
+from .simulate import simulate
 from . import _kernels as K
 
 ROOTS = ("upper", "lower")

@@ -8,6 +8,7 @@ measure the amplitude as sqrt(2) * RMS of x over the window from
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import fcntl
 import math
@@ -33,26 +34,33 @@ def _cache_dir() -> Path:
     return Path(os.environ.get("NUMBA_CACHE_DIR") or Path(K.__file__).parent / "__pycache__")
 
 
-def ensure_compiled(kind: str, friction: bool = False) -> None:
-    """Compile (or load from numba's on-disk cache) the kernel for one damper kind.
+@contextlib.contextmanager
+def compile_lock():
+    """Exclusive lock on the numba cache folder while kernels compile or load.
 
-    Done under an exclusive file lock so that processes starting together
-    (parallel Snakemake jobs) never write the cache at the same time: the first
-    compiles and stores, the others wait and then load.
+    Processes starting together (parallel Snakemake or SLURM jobs) never write
+    the on-disk cache at the same time: the first compiles and stores, the
+    others wait and then load.
     """
-    key = (kind, friction)
-    if key in _WARM:
-        return
     folder = _cache_dir()
     folder.mkdir(parents=True, exist_ok=True)
     with open(folder / "impact-jit.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
         try:
-            probe = System(kind, mu=0.01, beta=0.05, e=0.5, gap=1.0, rp=1.0 if kind == "pid" else 0.0,
-                           nu=0.1 if friction else 0.0)
-            _run_kernel(probe, 0.9, Protocol(periods=1.0, average_from=0.5), np.zeros(4), FREE_FLIGHT, 1)
+            yield
         finally:
             fcntl.flock(lock, fcntl.LOCK_UN)
+
+
+def ensure_compiled(kind: str, friction: bool = False) -> None:
+    """Compile (or load from numba's on-disk cache) the kernel for one damper kind, under compile_lock."""
+    key = (kind, friction)
+    if key in _WARM:
+        return
+    with compile_lock():
+        probe = System(kind, mu=0.01, beta=0.05, e=0.5, gap=1.0, rp=1.0 if kind == "pid" else 0.0,
+                       nu=0.1 if friction else 0.0)
+        _run_kernel(probe, 0.9, Protocol(periods=1.0, average_from=0.5), np.zeros(4), FREE_FLIGHT, 1)
     _WARM.add(key)
 
 

@@ -55,15 +55,16 @@ MAX_IDLE_PHASES = 200
 
 
 def make_event(g: Functional, r: float, phase: float, direction: int, t0: float | None = None,
-               z0=None, at_t0: float = 0.0):
+               z0=None, allowance: float = 0.0):
     """A scipy event function g(t, z) with terminal / direction attributes.
 
-    With t0, z0 given (an event that starts at zero to within round-off) the function is
-    shifted by its start value, so it starts exactly at zero, and returns ``at_t0``
-    (a tiny number on the side it is not crossing to) for t <= t0: scipy then
-    neither reports a root at the start of the phase, nor finds a spurious sign
-    change in the round-off right after it, nor trips over an interpolant that is
-    slightly off at the step start (LSODA).
+    With t0, z0 given (an event that starts at zero to within round-off) the function
+    is shifted so that it starts at ``-direction * allowance`` (just on the side it is
+    not crossing to) and is held there for t <= t0: scipy then neither reports a
+    root at the start of the phase, nor finds a spurious sign change in the
+    round-off right after it, nor trips over an interpolant that is slightly off at
+    the step start (LSODA); excursions smaller than ``allowance`` (round-off level)
+    are ignored.
     """
     w0, w1, w2, w3 = (float(v) for v in g.w)
     c0, cf = float(g.w0), float(g.wf)
@@ -76,12 +77,15 @@ def make_event(g: Functional, r: float, phase: float, direction: int, t0: float 
         def value(t, z):
             return w0 * z[0] + w1 * z[1] + w2 * z[2] + w3 * z[3] + c0 + cf * sin(r * t + phase)
 
-        event_shift = value(t0, z0)
+        at_t0 = -direction * allowance if direction else 0.0
+        shift = value(t0, z0) - at_t0
+        if at_t0 == 0.0:
+            at_t0 = 1e-300  # direction 0: any side; only used for non-crossing checks
 
         def event(t, z):
             if t <= t0:
                 return at_t0
-            return value(t, z) - event_shift
+            return value(t, z) - shift
 
     event.terminal = True
     event.direction = direction
@@ -143,16 +147,11 @@ class Segments:
         specs = list(events)
         all_events = []
         for g, direction in specs:
-            zero, _, rate = near_zero(g, t0, z0, aff, r, ph)
+            zero = near_zero(g, t0, z0, aff, r, ph)[0]
             if zero:
-                # starts at zero (to round-off / event-time resolution): pin the start value
-                # on the side it is not crossing to, so scipy neither finds a root at t0 nor
-                # trips over an interpolant that is slightly off there (LSODA)
-                if direction:
-                    at0 = -direction * 1e-300
-                else:
-                    at0 = math.copysign(1e-300, rate)
-                ev = make_event(g, r, ph, direction, t0, z0, at0)
+                # starts at zero (to round-off / event-time resolution): shift and pin it
+                size = float(np.abs(g.w) @ np.abs(z0)) + abs(g.w0) + abs(g.wf)
+                ev = make_event(g, r, ph, direction, t0, z0, 1e-13 * size + 1e-300)
             else:
                 ev = make_event(g, r, ph, direction)
             all_events.append(ev)

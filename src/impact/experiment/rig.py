@@ -795,20 +795,12 @@ def warm_up() -> None:
     global _WARM
     if _WARM:
         return
-    import fcntl
+    from ..simulate import compile_lock
 
-    from ..simulate import _cache_dir
-
-    folder = _cache_dir()
-    folder.mkdir(parents=True, exist_ok=True)
-    with open(folder / "impact-jit.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        try:
-            spec = rig_spec(mu=0.0129, gap_mm=30.0, rp=1.0, wall="steel")
-            run(spec, 1.0, 0.05, np.array([0.0, 0.01]), state=[0.0, 0.0, 0.3, 0.0], max_episodes=1)
-            _drop_contact(0.1, 1.0, 1e9, 1.5, 0.5, 1e-3, 1.0, 9.8, 0.0)
-        finally:
-            fcntl.flock(lock, fcntl.LOCK_UN)
+    with compile_lock():
+        spec = rig_spec(mu=0.0129, gap_mm=30.0, rp=1.0, wall="steel")
+        run(spec, 1.0, 0.05, np.array([0.0, 0.01]), state=[0.0, 0.0, 0.3, 0.0], max_episodes=1)
+        _drop_contact(0.1, 1.0, 1e9, 1.5, 0.5, 1e-3, 1.0, 9.8, 0.0)
     _WARM = True
 
 

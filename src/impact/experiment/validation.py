@@ -36,8 +36,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -1019,8 +1017,6 @@ def _local_peaks(amp: np.ndarray) -> np.ndarray:
 
 def evaluate_claims(cfg: dict, table, curves, fig3: dict | None = None, fig5: dict | None = None) -> dict:
     """Which of the paper's Sect. 3 claims the rig and the model support, with the numbers."""
-    import pandas as pd
-
     claims: dict[str, Any] = {}
     beta = float(cfg["structure"]["beta"])
     if fig3 is not None:
@@ -1170,20 +1166,12 @@ def ablation(cfg: dict | None = None, cases=None, variants: dict | None = None, 
 
 
 def _save(fig, paths) -> list[Path]:
+    from ..plotting import save_atomic
+
     out = []
     for p in paths:
-        p = Path(p)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{p.stem}.", suffix=p.suffix, dir=p.parent)
-        os.close(fd)
-        try:
-            fig.savefig(tmp, dpi=130, metadata={"CreationDate": None} if p.suffix == ".pdf" else None)
-            os.chmod(tmp, 0o644)
-            os.replace(tmp, p)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
-        out.append(p)
+        save_atomic(fig, p)
+        out.append(Path(p))
     return out
 
 
@@ -1302,16 +1290,9 @@ def plot_histories(data: dict, paths) -> list[Path]:
 
 
 def _write_text(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    from ..pipeline import write_text_atomic
+
+    write_text_atomic(path, text)
 
 
 def write_csv(df, path) -> Path:
