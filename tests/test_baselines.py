@@ -329,3 +329,18 @@ def test_bad_settings_are_refused():
         simulate_ivp(CID, 1.0, 10.0, 10.0)
     with pytest.raises(ValueError):
         simulate_ivp(CID, 1.0, 10.0, 0.0, start="middle")
+
+
+def test_chatter_sequences_end_in_sticking_for_every_ivp_method():
+    """Near resonance with a small clearance every cycle ends in a chatter sequence at a wall
+    (e = 0.25, g = 0.2): the rebounds must merge into sticking, not stall the run."""
+    s = System.from_gap_ratio("cid", 0.01, 0.0048, 0.25, 0.2)
+    t_end, t_win = 14.0 * TWO_PI, 10.0 * TWO_PI
+    ref = simulate_rk4(s, 1.0, t_end, t_win, dt=0.01)
+    assert ref.status == "ok" and ref.n_impacts_window >= 20
+    for method, rtol in (("DOP853", 1e-10), ("RK45", 1e-8), ("LSODA", 1e-8), ("Radau", 1e-8)):
+        res = simulate_ivp(s, 1.0, t_end, t_win, method=method, rtol=rtol)
+        assert res.status == "ok", method
+        assert res.amplitude == pytest.approx(ref.amplitude, rel=1e-5), method
+        # the sequences end in sticking (merged, equal velocities after the last impact)
+        assert np.count_nonzero(res.post[:, 0] == res.post[:, 1]) >= 4, method

@@ -223,7 +223,8 @@ def plot_work_precision(ds, footer: str, outputs, error: str = "amplitude_error"
             if not ok.any():
                 continue
             style = dict(ms=10, color="k") if integ == "core" else dict(ms=5)
-            ax.loglog(t[ok], np.maximum(e[ok], floor), "-" + markers.get(integ, "o"), label=str(integ), **style)
+            label = "core (the reference, drawn at the floor)" if integ == "core" else str(integ)
+            ax.loglog(t[ok], np.maximum(e[ok], floor), "-" + markers.get(integ, "o"), label=label, **style)
         horizon = float(ds["predictability_horizon"].sel(case=case))
         title = str(case) + (f" (inside predictability horizon t < {horizon:.0f})" if np.isfinite(horizon) else "")
         ax.set_title(title, fontsize=9)

@@ -20,7 +20,18 @@ carried separately), merges the masses (momentum-conserving,
 i.e. a plastic impact) into the stuck phase, which ends when the wall would
 have to pull.  A fresh flight after a slow rebound starts with a first step of
 a quarter of the predicted flight time, so the return to the wall cannot hide
-inside the first step.  Every run is capped (``max_impacts``, and a cap on
+inside the first step.
+
+Robustness details (each found necessary on the paper's parameter ranges):
+an event function that starts a phase at zero (to round-off or to the time
+resolution of the event that began the phase) is shifted to start just on its
+non-crossing side and held there at t0, so scipy neither reports a root at t0
+nor a spurious one in the round-off right after it (and LSODA's interpolant,
+which can be off at a step start, does not break the root bracket); a wall
+crossing that begins and ends inside one solver step (x just exceeding d/2 at
+its peak) is found from the extremum of s inside the step and located on the
+dense output, instead of being skipped as sign-change detection at the step
+ends would.  Every run is capped (``max_impacts``, and a cap on
 consecutive phases that make no progress): a cap ends the run with status
 ``failed: ...``, never an endless loop.
 
@@ -40,10 +51,9 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from . import (
-    Affine, ImpactLog, S_VEL, Functional, check_inputs, default_v_stick, free_affine,
-    H_STICK, impact_law, initial_state, leaves_now, make_result, merged_velocity, near_zero,
-    rebound_negligible, stuck_affine,
-    stuck_exit_functionals, wall_gap,
+    H_STICK, S_VEL, Affine, Functional, ImpactLog, check_inputs, default_v_stick, free_affine,
+    impact_law, initial_state, leaves_now, make_result, merged_velocity, near_zero,
+    rebound_negligible, stuck_affine, stuck_exit_functionals, wall_gap,
 )
 from ..params import System
 
