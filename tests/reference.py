@@ -51,3 +51,26 @@ def oscillator_derivatives(t, x0, v0, w2, two_zeta_w, amp, r, phase=0.0):
     # the homogeneous part obeys h'' = -two_zeta_w h' - w2 h
     hdd = -two_zeta_w * hd - w2 * h
     return (h + xs * np.sin(arg), hd + xs * r * np.cos(arg), hdd - xs * r * r * np.sin(arg))
+
+
+def one_body_amplitude(system, r, protocol):
+    """sqrt(2) RMS amplitude of structure + damper mass moving as one body (M + m), from rest."""
+    mu = system.mu
+    return rms_amplitude(lambda t: oscillator(t, 0.0, 0.0, 1 / (1 + mu), 2 * system.beta / (1 + mu),
+                                              system.force_ratio / (1 + mu), r), protocol.t_window, protocol.t_end)
+
+
+def copy_workflow(root, dest):
+    """A copy of the workflow (Snakefile, rules, config, profiles, library) to run in isolation."""
+    import shutil
+    from pathlib import Path
+
+    dest = Path(dest)
+    dest.mkdir(parents=True, exist_ok=True)
+    for name in ("Snakefile", "workflow", "config", "profiles", "src"):
+        src = Path(root) / name
+        if src.is_dir():
+            shutil.copytree(src, dest / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+        else:
+            shutil.copy2(src, dest / name)
+    return dest

@@ -32,6 +32,7 @@ from pathlib import Path
 import pytest
 import xarray as xr
 import yaml
+from reference import copy_workflow
 
 ROOT = Path(__file__).resolve().parents[1]
 # CI runs in a fresh clone with shared/ beside the repository
@@ -114,14 +115,7 @@ def slurm_cluster():
 
 
 def _copy_workflow(dest: Path) -> Path:
-    dest.mkdir(parents=True)
-    for name in ("Snakefile", "workflow", "config", "profiles", "src"):
-        src = ROOT / name
-        if src.is_dir():
-            shutil.copytree(src, dest / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
-        else:
-            shutil.copy2(src, dest / name)
-    return dest
+    return copy_workflow(ROOT, dest)
 
 
 def _env(work: Path, numba_cache: Path) -> dict:

@@ -1,6 +1,6 @@
 """Masri's closed-form 2-EIPC steady state of the classical impact damper.
 
-Implements ``/work/shared/docs/masri.md`` (sections 3.4, 4, 5, 6 and 7): the
+Implements ``../shared/docs/masri.md`` (sections 3.4, 4, 5, 6 and 7): the
 steady motion with two equally spaced impacts per forcing cycle, whether it is
 physically admissible, the main-mass amplitude, and the eigenvalues of the
 impact-to-impact Poincare map that decide its stability.
