@@ -344,3 +344,12 @@ def test_chatter_sequences_end_in_sticking_for_every_ivp_method():
         assert res.amplitude == pytest.approx(ref.amplitude, rel=1e-5), method
         # the sequences end in sticking (merged, equal velocities after the last impact)
         assert np.count_nonzero(res.post[:, 0] == res.post[:, 1]) >= 4, method
+
+
+def test_unresolved_accumulation_fails_fast():
+    """With the merging thresholds switched off the chatter cannot end: fail, do not crawl."""
+    s = System.from_gap_ratio("cid", 0.01, 0.0048, 0.25, 0.2)
+    for res in (simulate_ivp(s, 1.0, 70.0, 0.0, v_stick=0.0, h_stick=0.0),
+                simulate_rk4(s, 1.0, 70.0, 0.0, dt=0.01, v_stick=0.0, h_stick=0.0)):
+        assert res.status.startswith("failed:") and "accumulat" in res.status, res.status
+        assert res.n_impacts < 20000

@@ -24,7 +24,7 @@ rule cross_validation:
         fig5_pdf="results/validation/fig5.pdf",
     params:
         smoke=VALIDATION.get("smoke", False),
-    threads: 2
+    threads: VALIDATION.get("threads", 2)
     resources:
         runtime=30, mem_mb=2000,
     conda:

@@ -317,14 +317,30 @@ def leaves_now(g: Functional, t: float, z, aff: Affine, r: float, phase: float, 
 # Bookkeeping
 # ----------------------------------------------------------------------------------------------
 
+#: impacts at one wall in a row, each within ZENO_GAP of the previous one, beyond which a
+#: chatter sequence is declared unresolved (with the default thresholds a real sequence ends
+#: in sticking after a few dozen impacts)
+ZENO_IMPACTS = 1000
+ZENO_GAP = 1e-3
+
+
 class ImpactLog:
     def __init__(self):
         self.t: list[float] = []
         self.side: list[int] = []
         self.pre: list[tuple] = []
         self.post: list[tuple] = []
+        self.run_length = 0  # current run of close impacts at one wall
+
+    def zeno(self) -> bool:
+        """Has the last impact made an unresolved accumulation (see ZENO_IMPACTS)?"""
+        return self.run_length > ZENO_IMPACTS
 
     def add(self, t, side, pre, post=(math.nan, math.nan)) -> int:
+        if self.t and self.side[-1] == side and t - self.t[-1] < ZENO_GAP:
+            self.run_length += 1
+        else:
+            self.run_length = 1
         self.t.append(float(t))
         self.side.append(int(side))
         self.pre.append((float(pre[0]), float(pre[1])))

@@ -33,7 +33,7 @@ import math
 import numpy as np
 
 from . import (
-    H_STICK, Affine, ImpactLog, TrapzWindow, check_inputs, default_v_stick, free_affine, impact_law,
+    H_STICK, ZENO_IMPACTS, Affine, ImpactLog, TrapzWindow, check_inputs, default_v_stick, free_affine, impact_law,
     initial_state, leaves_now, make_result, merged_velocity, rebound_negligible, stuck_affine,
     stuck_exit_functionals,
 )
@@ -361,6 +361,10 @@ def simulate_rk4(system: System, r: float, t_end: float, t_window: float, start:
             mode = ("free", math.copysign(1.0, yd2 - xd2) if af > 0.0 else 0.0)
         log.add(t, wside, (xd, yd), (xd2, yd2))
         z = (x, xd2, y, yd2)
+        if log.zeno():
+            status = (f"failed: unresolved impact accumulation at t = {t:.6g} "
+                      f"(more than {ZENO_IMPACTS} close impacts; raise v_stick / h_stick)")
+            break
 
     return make_result(log, t_end_req=t_end, t_reached=t, t_window=t_window, z=z, x2_integral=trapz.total,
                        nfev=nfev, n_steps=n_steps, max_pen=max_pen, status=status,

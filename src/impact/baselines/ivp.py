@@ -51,7 +51,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from . import (
-    H_STICK, S_VEL, Affine, Functional, ImpactLog, check_inputs, default_v_stick, free_affine,
+    H_STICK, ZENO_IMPACTS, S_VEL, Affine, Functional, ImpactLog, check_inputs, default_v_stick, free_affine,
     impact_law, initial_state, leaves_now, make_result, merged_velocity, near_zero,
     rebound_negligible, stuck_affine, stuck_exit_functionals, wall_gap,
 )
@@ -402,6 +402,9 @@ def simulate_ivp(system: System, r: float, t_end: float, t_window: float, start:
             mode = ("free", sf_new, None)
         z[1], z[3] = xd, yd
         log.add(t, wside, pre, (xd, yd))
+        if log.zeno():
+            status = (f"failed: unresolved impact accumulation at t = {t:.6g} "
+                      f"(more than {ZENO_IMPACTS} close impacts; raise v_stick / h_stick)")
         if mode[0] == "free":
             mode = ("free", mode[1], flight_first_step(system, free_affine(system, mode[1]), t, z, r, wside))
 
