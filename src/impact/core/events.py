@@ -1,0 +1,285 @@
+"""Certified searches on one coefficient-form row: the first exit from a band, and the peak.
+
+On [a, b] a function with |h''| <= M2 stays within max(h(a), h(b)) + M2 (b-a)^2 / 8.
+The contact search accepts a step only when that bound keeps h inside its
+band, so a contact cannot be missed however briefly it lasts; a crossing is
+refined by safeguarded Newton once monotonicity is certified.  The same bound
+prunes the peak search: an interval whose bound cannot beat the running peak
+is dropped, and the others are split or searched for a zero of h'.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .segment import bound, deriv_at0, eval2, eval3
+
+HMIN = 1e-12       # smallest step before a touch is declared tangential
+_EPS = 2.220446049250313e-16
+PEAK_RTOL = 1e-12  # the peak search stops refining an interval within this of the running peak
+
+
+@njit(cache=True)
+def refine(kap, c, p, level, side, a, b):
+    """Time of the crossing of `level` in [a, b], h monotone there.
+
+    g = side (h - level) has g(a) < 0 <= g(b).  Returns the bracket end with
+    g >= 0, so the state is at (never before) the crossing.
+    """
+    t = 0.5 * (a + b)
+    for _ in range(200):
+        h, dh = eval2(kap, c, p, t)
+        g = side * (h - level)
+        if g >= 0.0:
+            b = t
+        else:
+            a = t
+        if b - a <= 4.0 * _EPS * max(abs(b), 1e-300):
+            break
+        dg = side * dh
+        tn = t - g / dg if dg != 0.0 else 0.5 * (a + b)
+        if not (a < tn < b):
+            tn = 0.5 * (a + b)
+        if tn == t:
+            break
+        t = tn
+    return b
+
+
+@njit(cache=True)
+def _escape_guess(h1, h2, h3, delta):
+    te = np.inf
+    if h1 != 0.0:
+        te = min(te, delta / abs(h1))
+    if h2 != 0.0:
+        te = min(te, math.sqrt(2.0 * delta / abs(h2)))
+    if h3 != 0.0:
+        te = min(te, (6.0 * delta / abs(h3)) ** (1.0 / 3.0))
+    if not te < np.inf:
+        te = HMIN
+    return max(0.25 * te, HMIN)
+
+
+@njit(cache=True)
+def _leave_boundary(kap, c, p, lo, hi, tau_max, escape, delta, out):
+    """Leave the band edge `escape` starts on; returns the clear time, or -1 with out filled.
+
+    For the first tiny steps h(tau) - h(0) is round-off, so separation is
+    proven by the Taylor expansion at 0 with its remainder; once steps are
+    long enough, by direct evaluation.
+    """
+    edge = hi if escape > 0 else lo
+    h1 = deriv_at0(kap, c, p, 1)
+    h2 = deriv_at0(kap, c, p, 2)
+    h3 = deriv_at0(kap, c, p, 3)
+    m4 = bound(kap, c, p, 4, tau_max)
+    te = _escape_guess(h1, h2, h3, delta)
+    last_clear = 0.0
+    steps = 0.0
+    while True:
+        if te >= tau_max:
+            out[0] = np.inf
+            out[1] = 0.0
+            out[3] = steps
+            return -1.0
+        steps += 1.0
+        pred = escape * (h1 * te + 0.5 * h2 * te * te + h3 * te * te * te / 6.0)
+        if -(pred + m4 * te ** 4 / 24.0) >= delta:
+            break
+        if te > 1e3 * HMIN:
+            hb, dhb = eval2(kap, c, p, te)
+            clearance = escape * (edge - hb)
+            if clearance >= delta:
+                break
+            if clearance > 0.0:
+                last_clear = te
+            elif escape * dhb > 0.0:
+                # back at the edge before separating by delta: a grazing contact
+                if last_clear > 0.0:
+                    te = refine(kap, c, p, edge, escape, last_clear, te)
+                out[0] = te
+                out[1] = escape
+                out[2] += 1.0
+                out[3] = steps
+                return -1.0
+        te *= 2.0
+    out[3] = steps
+    return te
+
+
+@njit(cache=True)
+def first_exit(kap, c, p, lo, hi, tau_max, escape, delta, out):
+    """First tau in (0, tau_max] where h leaves (lo, hi).
+
+    escape = +1/-1: h starts on hi/lo and is leaving it (after an impact or a
+    release); re-contact closer than the contact tolerance `delta` is not
+    resolved.  Writes out[0] = tau (inf if none), out[1] = side (+1 hi, -1 lo,
+    0 none), out[2] = grazing passes, out[3] = steps taken.
+    """
+    out[2] = 0.0
+    out[3] = 0.0
+    a = 0.0
+    if escape != 0:
+        a = _leave_boundary(kap, c, p, lo, hi, tau_max, escape, delta, out)
+        if a < 0.0:
+            return
+    m2 = bound(kap, c, p, 2, tau_max)
+    steps = out[3]
+    grazing = 0.0
+    ha, dha = eval2(kap, c, p, a)
+    near = False
+    while a < tau_max:
+        margin = max(min(hi - ha, ha - lo), 0.0)
+        hstep = math.sqrt(4.0 * margin / m2) if m2 > 0.0 else tau_max
+        hstep = max(hstep, HMIN)
+        while True:
+            b = min(a + hstep, tau_max)
+            w = b - a
+            hb, dhb = eval2(kap, c, p, b)
+            steps += 1.0
+            if hb >= hi or hb <= lo:
+                side = 1.0 if hb >= hi else -1.0
+                monotone = side * dha - m2 * w > 0.0 or side * dhb - m2 * w > 0.0
+                if monotone or w <= HMIN:
+                    level = hi if side > 0 else lo
+                    out[0] = refine(kap, c, p, level, side, a, b)
+                    out[1] = side
+                    out[2] = grazing + (0.0 if monotone else 1.0)
+                    out[3] = steps
+                    return
+                hstep = 0.5 * w
+                continue
+            spread = m2 * w * w / 8.0
+            if max(ha, hb) + spread < hi and min(ha, hb) - spread > lo:
+                break
+            if w <= HMIN:
+                break  # a tangency within round-off of the edge
+            hstep = 0.5 * w
+        close = min(hi - hb, hb - lo) < delta
+        if close and not near:
+            grazing += 1.0
+        near = close
+        a = b
+        ha = hb
+        dha = dhb
+    out[0] = np.inf
+    out[1] = 0.0
+    out[2] = grazing
+    out[3] = steps
+
+
+@njit(cache=True)
+def _zero_of_derivative(kap, c, p, a, b, da):
+    """A zero of h' in (a, b) where h' changes sign: safeguarded Newton on h'."""
+    t = 0.5 * (a + b)
+    for _ in range(100):
+        _, d, dd = eval3(kap, c, p, t)
+        if (d > 0.0) == (da > 0.0):
+            a = t
+        else:
+            b = t
+        if b - a <= 4.0 * _EPS * max(abs(b), 1e-300):
+            break
+        tn = t - d / dd if dd != 0.0 else 0.5 * (a + b)
+        if not (a < tn < b):
+            tn = 0.5 * (a + b)
+        if tn == t:
+            break
+        t = tn
+    return t
+
+
+@njit(cache=True)
+def peak_abs(kap, c, p, big_t, peak, stack):
+    """max(peak, max |h| over [0, T]), certified to PEAK_RTOL.
+
+    Branch and bound: an interval whose bound cannot beat the running peak is
+    dropped.  Where h' changes sign, its zero is refined and h evaluated
+    there; around it h'' keeps its sign over a radius |h''| / M3, so h has no
+    other extremum there and only the rest needs searching.  An interval where
+    h' provably keeps its sign is monotone: its ends hold its extremes.
+    stack: (n, 4) work array.  Returns the new peak and the time where it is
+    attained (-1 if the old peak stands).
+    """
+    m2 = bound(kap, c, p, 2, big_t)
+    h0, d0 = eval2(kap, c, p, 0.0)
+    h1, d1 = eval2(kap, c, p, big_t)
+    at = -1.0
+    if abs(h0) > peak:
+        peak = abs(h0)
+        at = 0.0
+    if abs(h1) > peak:
+        peak = abs(h1)
+        at = big_t
+    if max(abs(h0), abs(h1)) + m2 * big_t * big_t / 8.0 <= peak * (1.0 + PEAK_RTOL):
+        return peak, at
+    m3 = bound(kap, c, p, 3, big_t)
+    stack[0, 0] = 0.0
+    stack[0, 1] = big_t
+    stack[0, 2] = d0
+    stack[0, 3] = d1
+    top = 1
+    hmin = max(big_t, 1.0) * 1e-13
+    while top > 0:
+        top -= 1
+        a = stack[top, 0]
+        b = stack[top, 1]
+        da = stack[top, 2]
+        db = stack[top, 3]
+        ha, _ = eval2(kap, c, p, a)
+        hb, _ = eval2(kap, c, p, b)
+        w = b - a
+        if max(abs(ha), abs(hb)) + m2 * w * w / 8.0 <= peak * (1.0 + PEAK_RTOL) or w <= hmin:
+            continue
+        if (da > 0.0) == (db > 0.0) and min(abs(da), abs(db)) - m3 * w * w / 8.0 > 0.0:
+            continue  # monotone: the ends were counted
+        if top + 2 >= stack.shape[0]:
+            continue  # depth is bounded by log2(T / hmin); never overflow
+        if (da > 0.0) != (db > 0.0) and da != 0.0 and db != 0.0:
+            tz = _zero_of_derivative(kap, c, p, a, b, da)
+            hz, _, ddz = eval3(kap, c, p, tz)
+            if abs(hz) > peak:
+                peak = abs(hz)
+                at = tz
+            rho = abs(ddz) / m3 if m3 > 0.0 else np.inf
+            left = max(a, tz - rho)
+            right = min(b, tz + rho)
+            if left > a:
+                hl, dl = eval2(kap, c, p, left)
+                if abs(hl) > peak:
+                    peak = abs(hl)
+                    at = left
+                stack[top, 0] = a
+                stack[top, 1] = left
+                stack[top, 2] = da
+                stack[top, 3] = dl
+                top += 1
+            if right < b:
+                hr, dr = eval2(kap, c, p, right)
+                if abs(hr) > peak:
+                    peak = abs(hr)
+                    at = right
+                stack[top, 0] = right
+                stack[top, 1] = b
+                stack[top, 2] = dr
+                stack[top, 3] = db
+                top += 1
+            continue
+        mid = 0.5 * (a + b)
+        hm, dmid = eval2(kap, c, p, mid)
+        if abs(hm) > peak:
+            peak = abs(hm)
+            at = mid
+        stack[top, 0] = a
+        stack[top, 1] = mid
+        stack[top, 2] = da
+        stack[top, 3] = dmid
+        stack[top + 1, 0] = mid
+        stack[top + 1, 1] = b
+        stack[top + 1, 2] = dmid
+        stack[top + 1, 3] = db
+        top += 2
+    return peak, at

@@ -1,0 +1,33 @@
+"""Index constants of the scene kernels (plain ints: numba folds them)."""
+
+# unit kinds
+KIND_CID, KIND_PID, KIND_TMD = 0, 1, 2
+
+# unit modes
+MODE_FREE = 0     # moving on its own (between the walls, or a TMD)
+MODE_STUCK = 1    # resting against the wall on `side`, moving with its floor
+MODE_LOCKED = 2   # gap d = 0: one body with its floor
+MODE_FLOOR = 3    # friction only: dragged along by the floor away from the walls
+
+# scalar parameters (float64 vector)
+P_T0, P_TEND, P_TWIN, P_VSTICK, P_MAXEV, P_PERIOD = 0, 1, 2, 3, 4, 5
+P_OMEGA, P_PHI, P_F0 = 6, 7, 8          # harmonic load F0 sin(Omega t + phi)
+P_REC_T0, P_REC_DT = 9, 10              # record load: first sample time and step
+NPAR = 11
+
+# diagnostics (float64 vector)
+D_IMPACTS, D_IMPACTS_WIN, D_STICKS, D_GRAZE, D_PEN = 0, 1, 2, 3, 4
+D_WORK, D_VISC, D_IMPLOSS, D_E0, D_E1 = 5, 6, 7, 8, 9
+D_CAP, D_NREC, D_STEPS, D_STUCKTIME, D_TEND = 10, 11, 12, 13, 14
+D_FRICTION, D_SEGMENTS, D_SIMULTANEOUS, D_EMAX = 15, 16, 17, 18
+NDIAG = 19
+
+# impact record columns
+R_T, R_UNIT, R_SIDE, R_V0, R_W0, R_V1, R_W1, R_STUCK, R_IMPULSE = 0, 1, 2, 3, 4, 5, 6, 7, 8
+NREC = 9
+
+# monitor kinds: a linear combination of positions, or of accelerations plus
+# a multiple of the record (the absolute acceleration under ground motion)
+MON_DISP, MON_ACCEL = 0, 1
+
+NPOLY = 4  # polynomial part: degree 3 (a free mass under a piecewise-linear ground acceleration)
