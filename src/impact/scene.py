@@ -389,6 +389,7 @@ def _diagnostics(diag: np.ndarray) -> dict:
         "segments": int(diag[L.D_SEGMENTS]),
         "search_steps": int(diag[L.D_STEPS]),
         "event_cap_reached": bool(diag[L.D_CAP]),
+        "uncertified_peak_segments": int(diag[L.D_PEAK_GAVE_UP]),
     }
 
 

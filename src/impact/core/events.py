@@ -20,6 +20,7 @@ from .segment import bound, deriv_at0, eval2, eval3
 HMIN = 1e-12       # smallest step before a touch is declared tangential
 _EPS = 2.220446049250313e-16
 PEAK_RTOL = 1e-12  # the peak search stops refining an interval within this of the running peak
+PEAK_MAX_VISITS = 100000  # a function of pure round-off could split forever: give up, and say so
 
 
 @njit(cache=True)
@@ -202,7 +203,7 @@ def peak_abs(kap, c, p, big_t, peak, stack):
     other extremum there and only the rest needs searching.  An interval where
     h' provably keeps its sign is monotone: its ends hold its extremes.
     stack: (n, 4) work array.  Returns the new peak and the time where it is
-    attained (-1 if the old peak stands).
+    attained (-1 if the old peak stands, -2 if the search gave up).
     """
     m2 = bound(kap, c, p, 2, big_t)
     h0, d0 = eval2(kap, c, p, 0.0)
@@ -223,7 +224,11 @@ def peak_abs(kap, c, p, big_t, peak, stack):
     stack[0, 3] = d1
     top = 1
     hmin = max(big_t, 1.0) * 1e-13
+    visits = 0
     while top > 0:
+        visits += 1
+        if visits > PEAK_MAX_VISITS:
+            return peak, -2.0 if at < 0.0 else at  # the caller flags an uncertified peak
         top -= 1
         a = stack[top, 0]
         b = stack[top, 1]

@@ -20,7 +20,7 @@ from numba import njit
 from .contact import floor_decision, floor_mass, floor_row, solve_impulses, stays, stuck_row
 from .events import first_exit, peak_abs
 from .layout import (D_CAP, D_E0, D_E1, D_EMAX, D_FRICTION, D_GRAZE, D_IMPACTS, D_IMPACTS_WIN, D_IMPLOSS, D_NREC,
-                     D_PEN, D_SEGMENTS, D_SIMULTANEOUS, D_STEPS, D_STICKS, D_STUCKTIME, D_TEND, D_VISC, D_WORK,
+                     D_PEAK_GAVE_UP, D_PEN, D_SEGMENTS, D_SIMULTANEOUS, D_STEPS, D_STICKS, D_STUCKTIME, D_TEND, D_VISC, D_WORK,
                      KIND_PID, KIND_TMD, MODE_FLOOR, MODE_FREE, MODE_LOCKED, MODE_STUCK, MON_ACCEL, NDIAG, NPOLY,
                      P_MAXEV, P_OMEGA, P_PERIOD, P_PHI, P_REC_DT, P_REC_T0, P_T0, P_TEND, P_TWIN, P_VSTICK, R_IMPULSE,
                      R_SIDE, R_STUCK, R_T, R_UNIT, R_V0, R_V1, R_W0, R_W1)
@@ -253,7 +253,7 @@ def _shift_row(kap, c, p, a, cs, ps):
 
 @njit(cache=True)
 def monitor_segment(kap, C, P, tau, t, t_win, mon_rows, mon_kind, mon_rec, r0, r1, pair, single,
-                    cm, pm, cs, ps, stack, mon_peak, mon_peak_t, mon_x2):
+                    cm, pm, cs, ps, stack, mon_peak, mon_peak_t, mon_x2, diag):
     """Certified peaks of every monitor over the segment, and its square integrated over the window."""
     nt = kap.shape[0]
     for m in range(mon_rows.shape[0]):
@@ -276,7 +276,9 @@ def monitor_segment(kap, C, P, tau, t, t_win, mon_rows, mon_kind, mon_rec, r0, r
             pm[2] = 0.0
             pm[3] = 0.0
         peak, at = peak_abs(kap, cm, pm, tau, mon_peak[m], stack)
-        if at >= 0.0:
+        if at == -2.0:
+            diag[D_PEAK_GAVE_UP] += 1.0
+        elif at >= 0.0:
             mon_peak[m] = peak
             mon_peak_t[m] = t + at
         if m == 0 and t + tau > t_win:
@@ -672,7 +674,7 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
         integrate_segment(kap, C, P, tau, nf, building, units, springs, mode, load_vec, harm, record,
                           theta0, r0, r1, pair, single, cv, pv, cu, pu, diag)
         monitor_segment(kap, C, P, tau, t, t_win, mon_rows, mon_kind, mon_rec, r0, r1, pair, single, cm, pm, cs,
-                        ps, stack, mon_peak, mon_peak_t, mon_x2)
+                        ps, stack, mon_peak, mon_peak_t, mon_x2, diag)
         its = sample_segment(kap, C, P, t, tau, ts, its, samples, qs, vs)
         if fric is not None:
             for j in range(nu):

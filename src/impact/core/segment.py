@@ -254,15 +254,28 @@ def config_slot(building, units, springs, load_vec, omega, mode, cache, cursor):
     zc = cache[9]
     zc[s, :] = 0.0
     if omega > 0.0:
+        # particular solution mode by mode: a mode the load does not reach (the opposite swing of
+        # identical undamped pendulums, say) has no part in it even when it sits at the load's frequency
+        vec, vinv = cache[3], cache[4]
         rhs = np.zeros(2 * n, dtype=np.complex128)
         for i in range(n):
             rhs[n + i] = lr[i] / m[i]
-        shifted = -a_mat
+        modal = np.zeros(2 * n, dtype=np.complex128)
+        size = 0.0
+        for k in range(2 * n):
+            for i in range(2 * n):
+                modal[k] += vinv[s, k, i] * rhs[i]
+            size = max(size, abs(modal[k]))
+        for k in range(2 * n):
+            if abs(modal[k]) <= 1e-13 * size:
+                modal[k] = 0.0
+            else:
+                modal[k] = modal[k] / (1j * omega - cache[2][s, k])
         for i in range(2 * n):
-            shifted[i, i] += 1j * omega
-        sol = np.linalg.solve(shifted, rhs)
-        for i in range(2 * n):
-            zc[s, i] = sol[i]
+            acc = 0.0 + 0.0j
+            for k in range(2 * n):
+                acc += vec[s, i, k] * modal[k]
+            zc[s, i] = acc
     keys[s] = key
     return s
 
