@@ -194,7 +194,25 @@ def _zero_of_derivative(kap, c, p, a, b, da):
 
 
 @njit(cache=True)
-def peak_abs(kap, c, p, big_t, peak, stack):
+def _ends(kap, ek, c, p, big_t):
+    """h(0), h'(0), h(T), h'(T) from ek = exp(kap T): no exponentials to evaluate."""
+    h0 = p[0]
+    d0 = p[1]
+    h1 = p[0] + big_t * (p[1] + big_t * (p[2] + big_t * p[3]))
+    d1 = p[1] + big_t * (2.0 * p[2] + 3.0 * big_t * p[3])
+    for k in range(kap.shape[0]):
+        ck = c[k]
+        if ck.real != 0.0 or ck.imag != 0.0:
+            ckk = ck * kap[k]
+            h0 += ck.real
+            d0 += ckk.real
+            h1 += (ck * ek[k]).real
+            d1 += (ckk * ek[k]).real
+    return h0, d0, h1, d1
+
+
+@njit(cache=True)
+def peak_abs(kap, ek, c, p, big_t, peak, stack):
     """max(peak, max |h| over [0, T]), certified to PEAK_RTOL.
 
     Branch and bound: an interval whose bound cannot beat the running peak is
@@ -202,12 +220,10 @@ def peak_abs(kap, c, p, big_t, peak, stack):
     there; around it h'' keeps its sign over a radius |h''| / M3, so h has no
     other extremum there and only the rest needs searching.  An interval where
     h' provably keeps its sign is monotone: its ends hold its extremes.
-    stack: (n, 4) work array.  Returns the new peak and the time where it is
+    ek = exp(kap T); stack: (n, 4) work array.  Returns the new peak and the time where it is
     attained (-1 if the old peak stands, -2 if the search gave up).
     """
-    m2 = bound(kap, c, p, 2, big_t)
-    h0, d0 = eval2(kap, c, p, 0.0)
-    h1, d1 = eval2(kap, c, p, big_t)
+    h0, d0, h1, d1 = _ends(kap, ek, c, p, big_t)
     at = -1.0
     if abs(h0) > peak:
         peak = abs(h0)
@@ -215,6 +231,7 @@ def peak_abs(kap, c, p, big_t, peak, stack):
     if abs(h1) > peak:
         peak = abs(h1)
         at = big_t
+    m2 = bound(kap, c, p, 2, big_t)
     if max(abs(h0), abs(h1)) + m2 * big_t * big_t / 8.0 <= peak * (1.0 + PEAK_RTOL):
         return peak, at
     m3 = bound(kap, c, p, 3, big_t)

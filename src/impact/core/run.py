@@ -53,6 +53,8 @@ def record_value(record, p, t):
         t_i = t_next
         t_next = t0 + (i + 1) * dt
     slope = (record[i + 1] - record[i]) / dt
+    if t == t_i:
+        return record[i], slope, t_next
     return record[i] + slope * (t - t_i), slope, t_next
 
 
@@ -98,7 +100,7 @@ def _same_unit_state(j, nf, units, mode, side, sigma, escape, escape_v, C, P):
 @njit(cache=True)
 def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape, escape_v, tau_max,
                   r0, r1, ev_t, ev_side, ev_kind, cs, ps, cq, pq, out, diag):
-    """Next event of every unit; returns the earliest time (inf if none before tau_max)."""
+    """Next event of every unit; returns the earliest time (inf if none up to tau_max)."""
     ukind, ufloor, um, uload, ud = units[0], units[1], units[2], units[3], units[4]
     best = tau_max
     for j in range(um.shape[0]):
@@ -172,7 +174,11 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
                     ev_t[j] = out[0]
                     ev_side[j] = int(out[1])
                     ev_kind[j] = EV_FLOOR_EXIT
-    return best
+    found = np.inf
+    for j in range(um.shape[0]):
+        if ev_t[j] < found:
+            found = ev_t[j]
+    return found
 
 
 @njit(cache=True)
@@ -252,7 +258,7 @@ def _shift_row(kap, c, p, a, cs, ps):
 
 
 @njit(cache=True)
-def monitor_segment(kap, C, P, tau, t, t_win, mon_rows, mon_kind, mon_rec, r0, r1, pair, single,
+def monitor_segment(kap, ek, C, P, tau, t, t_win, mon_rows, mon_kind, mon_rec, r0, r1, pair, single,
                     cm, pm, cs, ps, stack, mon_peak, mon_peak_t, mon_x2, diag):
     """Certified peaks of every monitor over the segment, and its square integrated over the window."""
     nt = kap.shape[0]
@@ -275,7 +281,7 @@ def monitor_segment(kap, C, P, tau, t, t_win, mon_rows, mon_kind, mon_rec, r0, r
             pm[1] = 6.0 * pm[3] + mon_rec[m] * r1
             pm[2] = 0.0
             pm[3] = 0.0
-        peak, at = peak_abs(kap, cm, pm, tau, mon_peak[m], stack)
+        peak, at = peak_abs(kap, ek, cm, pm, tau, mon_peak[m], stack)
         if at == -2.0:
             diag[D_PEAK_GAVE_UP] += 1.0
         elif at >= 0.0:
@@ -288,10 +294,10 @@ def monitor_segment(kap, C, P, tau, t, t_win, mon_rows, mon_kind, mon_rec, r0, r
                 # the one segment that the window's start cuts: tables of its own
                 _shift_row(kap, cm, pm, start, cs, ps)
                 rest = tau - start
-                ek = np.exp(kap * rest)
+                ek_w = np.exp(kap * rest)
                 pair_w = np.empty_like(pair)
                 single_w = np.empty_like(single)
-                integral_tables(kap, ek, rest, pair_w, single_w)
+                integral_tables(kap, ek_w, rest, pair_w, single_w)
                 mon_x2[m] += int_prod(rest, pair_w, single_w, cs, ps, cs, ps)
             else:
                 mon_x2[m] += int_prod(tau, pair, single, cm, pm, cm, pm)
@@ -660,11 +666,15 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
                       omega, kap, C, P)
         diag[D_SEGMENTS] += 1.0
         tau_max = t_next - t
+        if record is not None and t_next < t_end and abs(tau_max - p[P_REC_DT]) <= 1e-9 * p[P_REC_DT]:
+            # a whole sample step: its length is the record's dt, not the difference of two rounded times,
+            # so every such step shares one set of integral tables
+            tau_max = p[P_REC_DT]
         best = search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape, escape_v, tau_max,
                              r0, r1, ev_t, ev_side, ev_kind, cs, ps, cq, pq, out, diag)
         event = best <= tau_max and best < np.inf
         tau = best if event else tau_max
-        if key != tab_key or abs(tau - tab_tau) > 8.0 * 2.220446049250313e-16 * tau:
+        if key != tab_key or tau != tab_tau:
             # sampled loads repeat the same step in the same configuration: the tables carry over
             for k in range(nt):
                 ek[k] = np.exp(kap[k] * tau)
@@ -673,7 +683,7 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
             tab_tau = tau
         integrate_segment(kap, C, P, tau, nf, building, units, springs, mode, load_vec, harm, record,
                           theta0, r0, r1, pair, single, cv, pv, cu, pu, diag)
-        monitor_segment(kap, C, P, tau, t, t_win, mon_rows, mon_kind, mon_rec, r0, r1, pair, single, cm, pm, cs,
+        monitor_segment(kap, ek, C, P, tau, t, t_win, mon_rows, mon_kind, mon_rec, r0, r1, pair, single, cm, pm, cs,
                         ps, stack, mon_peak, mon_peak_t, mon_x2, diag)
         its = sample_segment(kap, C, P, t, tau, ts, its, samples, qs, vs)
         if fric is not None:
