@@ -35,7 +35,7 @@ from impact.records import load_record
 from impact.scene import Damper, GroundMotion, Scene, simulate_scene
 
 MASS_RATIO, GAP_M, RESTITUTION, PGA_G = 0.02, 0.05, 0.5, 0.35
-HERTZ_K = 1.0e9        # N/m^1.5, the Hertz stiffness of steel on steel at this scale (order of magnitude)
+HERTZ_K = 1.0e12       # N/m^1.5: stiff enough that the contact's compliance stays well inside the gap
 YIELD_FRACTION = 0.1   # ImpactMaterial's yield displacement over the expected penetration (the usual a = 0.1)
 
 
@@ -47,22 +47,24 @@ def the_building() -> Building:
     return Building.explicit(uniform.masses, k, storey_damping=c)
 
 
-def impact_material_params(m_eff: float, speed: float, e: float) -> tuple[float, float, float]:
+def impact_material_params(m_eff: float, speed: float, e: float, k_h: float) -> tuple[float, float, float]:
     """(K1, K2, delta_y) of ImpactMaterial giving the energy loss of restitution e at this impact speed."""
-    delta_m = (1.25 * m_eff * speed ** 2 / HERTZ_K) ** 0.4  # Hertz: 1/2 m v^2 = k_h delta^2.5 / 2.5
-    k_eff = HERTZ_K * math.sqrt(delta_m)
-    loss = HERTZ_K * delta_m ** 2.5 * (1.0 - e * e) / 2.5
+    delta_m = (1.25 * m_eff * speed ** 2 / k_h) ** 0.4  # Hertz: 1/2 m v^2 = k_h delta^2.5 / 2.5
+    k_eff = k_h * math.sqrt(delta_m)
+    loss = k_h * delta_m ** 2.5 * (1.0 - e * e) / 2.5
     dy = YIELD_FRACTION * delta_m
     k1 = k_eff + loss / (YIELD_FRACTION * delta_m ** 2)
     k2 = k_eff - loss / ((1.0 - YIELD_FRACTION) * delta_m ** 2)
     return k1, k2, dy
 
 
-def run_opensees(building: Building, damper_mass: float, gm: GroundMotion, dt: float, speed: float) -> dict:
+def run_opensees(building: Building, damper_mass: float, gm: GroundMotion, dt: float, speed: float,
+                 k_h: float) -> dict:
     import openseespy.opensees as ops
 
     n = building.storeys
     ops.wipe()
+    ops.logFile("/dev/null", "-noEcho")  # a failed step prints four lines; the count is kept below
     ops.model("basic", "-ndm", 1, "-ndf", 1)
     ops.node(0, 0.0)
     ops.fix(0, 1)
@@ -81,7 +83,7 @@ def run_opensees(building: Building, damper_mass: float, gm: GroundMotion, dt: f
         ops.uniaxialMaterial("Elastic", i, float(building.storey_stiffness[i - 1]), float(c_storey[i - 1]))
         ops.element("zeroLength", i, i - 1, i, "-mat", i, "-dir", 1)
     m_eff = damper_mass * building.masses[-1] / (damper_mass + building.masses[-1])
-    k1, k2, dy = impact_material_params(m_eff, speed, RESTITUTION)
+    k1, k2, dy = impact_material_params(m_eff, speed, RESTITUTION, k_h)
     ops.uniaxialMaterial("ImpactMaterial", 100, k1, k2, -dy, -0.5 * GAP_M)
     # left wall: compression when s = u_d - u_roof < -d/2; right wall: the same element reversed
     ops.element("zeroLength", 100, n, n + 1, "-mat", 100, "-dir", 1)
@@ -116,6 +118,7 @@ def run_opensees(building: Building, damper_mass: float, gm: GroundMotion, dt: f
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--budget-s", type=float, default=120.0, help="stop the ladder after a run this long")
+    ap.add_argument("--hertz-k", type=float, default=HERTZ_K, help="Hertz contact stiffness, N/m^1.5")
     ap.add_argument("--out", default="benchmarks/results/opensees.json")
     args = ap.parse_args(argv)
     building = the_building()
@@ -137,7 +140,7 @@ def main(argv=None) -> int:
     ladder = []
     dt = gm.dt
     while True:
-        row = run_opensees(building, damper.mass, gm, dt, speed)
+        row = run_opensees(building, damper.mass, gm, dt, speed, args.hertz_k)
         row["peak_error"] = abs(row["peak_roof_displacement"] - ref) / ref
         row["slower_than_exact"] = row["seconds"] / t_ours
         ladder.append(row)
@@ -148,7 +151,7 @@ def main(argv=None) -> int:
     matched = next((r for r in ladder if r["peak_error"] <= 1e-3), None)
     report = {"case": "3 storeys, CID 2 % at the roof, gap 0.05 m, e = 0.5, El Centro 0.35 g",
               "exact_core_seconds": t_ours, "exact_peak_roof_displacement": ref, "ladder": ladder,
-              "matched_1e-3": matched, "contact": "ImpactMaterial (bilinear Hertz), calibrated to e at the median "
+              "matched_1e-3": matched, "hertz_k": args.hertz_k, "contact": "ImpactMaterial (bilinear Hertz), calibrated to e at the median "
                                                   "impact speed of the exact run"}
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(json.dumps(report, indent=1) + "\n")

