@@ -35,7 +35,7 @@ from impact.records import load_record
 from impact.scene import Damper, GroundMotion, Scene, simulate_scene
 
 MASS_RATIO, GAP_M, RESTITUTION, PGA_G = 0.02, 0.05, 0.5, 0.35
-HERTZ_K = 1.0e12       # N/m^1.5: stiff enough that the contact's compliance stays well inside the gap
+HERTZ_K = 1.0e10       # N/m^1.5; 1e12 keeps the contact stiffer, but Newton then fails at most steps
 YIELD_FRACTION = 0.1   # ImpactMaterial's yield displacement over the expected penetration (the usual a = 0.1)
 
 
@@ -93,8 +93,9 @@ def run_opensees(building: Building, damper_mass: float, gm: GroundMotion, dt: f
     ops.constraints("Plain")
     ops.numberer("Plain")
     ops.system("BandGeneral")
-    ops.test("NormDispIncr", 1e-12, 50)
-    ops.algorithm("Newton")
+    # a displacement increment of 1e-10 m is far below the accuracy asked; tighter, stiff contact stalls Newton
+    ops.test("NormDispIncr", 1e-10, 100)
+    ops.algorithm("KrylovNewton")
     ops.integrator("Newmark", 0.5, 0.25)
     ops.analysis("Transient")
     steps = int(round(gm.duration / dt))
@@ -104,7 +105,11 @@ def run_opensees(building: Building, damper_mass: float, gm: GroundMotion, dt: f
     t0 = time.perf_counter()
     for _ in range(steps):
         if ops.analyze(1, dt) != 0:
-            failed += 1
+            # the usual fallback: the initial stiffness, which always converges for a bilinear contact
+            ops.algorithm("ModifiedNewton", "-initial")
+            if ops.analyze(1, dt) != 0:
+                failed += 1
+            ops.algorithm("KrylovNewton")
         roof = ops.nodeDisp(n, 1)
         s = ops.nodeDisp(n + 1, 1) - roof
         peak = max(peak, abs(roof))

@@ -36,6 +36,9 @@ import math
 import numpy as np
 from numba import njit
 
+from .core.events import first_exit
+from .core.jitcache import purge_stale_cache
+
 NT = 7  # coefficient slots, see module docstring
 
 MODE_FREE = 0
@@ -58,27 +61,11 @@ NDIAG = 17
 # record columns: t, side, x, v-, w-, v+, w+, stuck_after
 NREC = 8
 
-_HMIN = 1e-12      # smallest step before a touch is declared tangential
-_EPS = 2.220446049250313e-16
 
 
 # ----------------------------------------------------------------------------
 # evaluation of coefficient-form functions
 # ----------------------------------------------------------------------------
-
-@njit(cache=True)
-def _eval2(kap, c, p1, p2, tau):
-    """h(tau) and h'(tau) of a coefficient-form function."""
-    h = 0.0
-    dh = 0.0
-    for k in range(NT):
-        ck = c[k]
-        if ck.real != 0.0 or ck.imag != 0.0:
-            z = ck * np.exp(kap[k] * tau)
-            h += z.real
-            dh += (z * kap[k]).real
-    return h + p1 * tau + p2 * tau * tau, dh + p1 + 2.0 * p2 * tau
-
 
 @njit(cache=True)
 def _deriv_at0(kap, c, n):
@@ -224,147 +211,6 @@ def _build_combined(kap, cx, cy, poly, z0, t0, p, offset):
 # event location
 # ----------------------------------------------------------------------------
 
-@njit(cache=True)
-def _refine(kap, c, p1, p2, level, side, a, b):
-    """Time of the crossing of `level` in [a, b], h monotone there.
-
-    g = side (h - level) has g(a) < 0 <= g(b).  Safeguarded Newton; returns the
-    bracket end with g >= 0 so the state is at (never before) the crossing.
-    """
-    t = 0.5 * (a + b)
-    for _ in range(200):
-        h, dh = _eval2(kap, c, p1, p2, t)
-        g = side * (h - level)
-        if g >= 0.0:
-            b = t
-        else:
-            a = t
-        if b - a <= 4.0 * _EPS * max(abs(b), 1e-300):
-            break
-        dg = side * dh
-        tn = t - g / dg if dg != 0.0 else 0.5 * (a + b)
-        if not (a < tn < b):
-            tn = 0.5 * (a + b)
-        if tn == t:
-            break
-        t = tn
-    return b
-
-
-@njit(cache=True)
-def _escape_guess(h1, h2, h3, delta):
-    """Time to move delta off a boundary by the leading Taylor term (a first step)."""
-    te = np.inf
-    if h1 != 0.0:
-        te = min(te, delta / abs(h1))
-    if h2 != 0.0:
-        te = min(te, math.sqrt(2.0 * delta / abs(h2)))
-    if h3 != 0.0:
-        te = min(te, (6.0 * delta / abs(h3)) ** (1.0 / 3.0))
-    if not te < np.inf:
-        te = _HMIN
-    return max(0.25 * te, _HMIN)
-
-
-@njit(cache=True)
-def first_exit(kap, c, p1, p2, lo, hi, tau_max, escape, delta, out):
-    """First tau in (0, tau_max] where h leaves (lo, hi).
-
-    escape = +1/-1: the function starts on hi/lo and is leaving it (after an
-    impact or a release); re-contact closer than the contact tolerance
-    `delta` is not resolved.  Writes out[0] = tau (inf if none), out[1] = side
-    (+1 hi, -1 lo, 0 none), out[2] = grazing passes, out[3] = steps taken.
-    """
-    m2 = _bound(kap, c, 2) + 2.0 * abs(p2)
-    a = 0.0
-    grazing = 0.0
-    steps = 0.0
-    if escape != 0:
-        # Leave the boundary.  For the first tiny steps h(tau) - h(0) is all
-        # round-off, so separation is proven by the Taylor expansion at 0 with
-        # its remainder; once steps are long enough, by direct evaluation.
-        bound = hi if escape > 0 else lo
-        h1 = _deriv_at0(kap, c, 1) + p1
-        h2 = _deriv_at0(kap, c, 2) + 2.0 * p2
-        h3 = _deriv_at0(kap, c, 3)
-        m4 = _bound(kap, c, 4)
-        te = _escape_guess(h1, h2, h3, delta)
-        last_clear = 0.0
-        while True:
-            if te >= tau_max:
-                out[0] = np.inf
-                out[1] = 0.0
-                out[2] = grazing
-                out[3] = steps
-                return
-            steps += 1.0
-            pred = escape * (h1 * te + 0.5 * h2 * te * te + h3 * te * te * te / 6.0)
-            if -(pred + m4 * te ** 4 / 24.0) >= delta:
-                break
-            if te > 1e3 * _HMIN:
-                hb, dhb = _eval2(kap, c, p1, p2, te)
-                clearance = escape * (bound - hb)
-                if clearance >= delta:
-                    break
-                if clearance > 0.0:
-                    last_clear = te
-                elif escape * dhb > 0.0:
-                    # back at the boundary before separating by delta
-                    if last_clear > 0.0:
-                        te = _refine(kap, c, p1, p2, bound, escape, last_clear, te)
-                    out[0] = te
-                    out[1] = escape
-                    out[2] = grazing + 1.0
-                    out[3] = steps
-                    return
-            te *= 2.0
-        a = te
-    ha, dha = _eval2(kap, c, p1, p2, a)
-    near = False
-    while a < tau_max:
-        margin = max(min(hi - ha, ha - lo), 0.0)
-        if m2 > 0.0:
-            hstep = math.sqrt(4.0 * margin / m2)
-        else:
-            hstep = tau_max
-        hstep = max(hstep, _HMIN)
-        while True:
-            b = min(a + hstep, tau_max)
-            w = b - a
-            hb, dhb = _eval2(kap, c, p1, p2, b)
-            steps += 1.0
-            if hb >= hi or hb <= lo:
-                side = 1.0 if hb >= hi else -1.0
-                monotone = side * dha - m2 * w > 0.0 or side * dhb - m2 * w > 0.0
-                if monotone or w <= _HMIN:
-                    level = hi if side > 0 else lo
-                    out[0] = _refine(kap, c, p1, p2, level, side, a, b)
-                    out[1] = side
-                    out[2] = grazing + (0.0 if monotone else 1.0)
-                    out[3] = steps
-                    return
-                hstep = 0.5 * w
-                continue
-            spread = m2 * w * w / 8.0
-            if max(ha, hb) + spread < hi and min(ha, hb) - spread > lo:
-                break
-            if w <= _HMIN:
-                break  # a tangency within round-off of the wall
-            hstep = 0.5 * w
-        # count each pass within contact tolerance of a wall once
-        close = min(hi - hb, hb - lo) < delta
-        if close and not near:
-            grazing += 1.0
-        near = close
-        a = b
-        ha = hb
-        dha = dhb
-    out[0] = np.inf
-    out[1] = 0.0
-    out[2] = grazing
-    out[3] = steps
-
-
 # ----------------------------------------------------------------------------
 # exact integrals over a segment
 # ----------------------------------------------------------------------------
@@ -484,6 +330,14 @@ def _floor_decision(kap, cx, a_f):
 
 
 @njit(cache=True)
+def _poly4(pp, p1, p2):
+    pp[0] = 0.0
+    pp[1] = p1
+    pp[2] = p2
+    pp[3] = 0.0
+
+
+@njit(cache=True)
 def encode_contact(mode, side, sigma):
     return mode + 10 * (side + 1) + 100 * (sigma + 1)
 
@@ -512,6 +366,7 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
     cq = np.zeros(NT, dtype=np.complex128)
     cf = np.zeros(NT, dtype=np.complex128)
     poly = np.zeros(2)
+    pp = np.zeros(4)  # (0, p1, p2, 0): the polynomial part as the shared search takes it
     ev = np.zeros(4)
     ev2 = np.zeros(4)
     z = z_init.copy()
@@ -575,15 +430,16 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
             for k in range(NT):
                 cs[k] = cy[k] - cx[k]
             delta = 1e-12 * (_bound(kap, cs, 0) + d)
-            first_exit(kap, cs, poly[0], poly[1], -half, half, tau_max, escape, delta, ev)
+            _poly4(pp, poly[0], poly[1])
+            first_exit(kap, cs, pp, -half, half, tau_max, escape, delta, ev)
             if fric is not None:
                 # sigma * s' > 0 while sliding; the slide ends where it reaches 0
                 for k in range(NT):
                     cq[k] = sigma * cs[k] * kap[k]
                 cq[6] += sigma * poly[0]
                 dv = 1e-12 * (_bound(kap, cq, 0) + 2.0 * abs(poly[1]))
-                first_exit(kap, cq, 2.0 * sigma * poly[1], 0.0, 0.0, np.inf, min(ev[0], tau_max),
-                           escape_v, dv, ev2)
+                _poly4(pp, 2.0 * sigma * poly[1], 0.0)
+                first_exit(kap, cq, pp, 0.0, np.inf, min(ev[0], tau_max), escape_v, dv, ev2)
                 diag[D_STEPS] += ev2[3]
                 if ev2[0] < ev[0]:
                     ev[0] = ev2[0]
@@ -598,7 +454,8 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
             # force is known to move away from it (see _stays_stuck)
             q0 = _deriv_at0(kap, cq, 0)
             esc = 1 if level - q0 < delta else 0
-            first_exit(kap, cq, 0.0, 0.0, -np.inf, level, tau_max, esc, delta, ev)
+            _poly4(pp, 0.0, 0.0)
+            first_exit(kap, cq, pp, -np.inf, level, tau_max, esc, delta, ev)
         elif mode == MODE_FLOOR:
             for k in range(NT):
                 cq[k] = cx[k] * kap[k] * kap[k]
@@ -607,7 +464,8 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
             esc = 0
             if a_f - abs(q0) < delta:
                 esc = 1 if q0 > 0.0 else -1
-            first_exit(kap, cq, 0.0, 0.0, -a_f, a_f, tau_max, esc, delta, ev)
+            _poly4(pp, 0.0, 0.0)
+            first_exit(kap, cq, pp, -a_f, a_f, tau_max, esc, delta, ev)
         else:
             ev[0] = np.inf
             ev[1] = 0.0
@@ -732,3 +590,6 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
     for i in range(4):
         z_out[i] = z[i]
     return encode_contact(mode, side, sigma)
+
+
+purge_stale_cache(run, "impact-kernels")

@@ -21,7 +21,9 @@ def library(*names):
     return [os.path.join("src", "impact", name) for name in names]
 
 
-LIB_CORE = library("__init__.py", "params.py", "_kernels.py", "simulate.py", "provenance.py", "pipeline.py")
+# the paper kernel shares its contact search (and so these modules) with the scene core
+LIB_CORE = library("__init__.py", "params.py", "_kernels.py", "simulate.py", "provenance.py", "pipeline.py",
+                   "core/__init__.py", "core/events.py", "core/segment.py", "core/layout.py", "core/jitcache.py")
 LIB_SWEEP = LIB_CORE + library("dataset.py", "study.py")
 LIB_TMD = library("tmd.py", "pipeline.py", "params.py")
 LIB_PLOT = library("plotting.py", "study.py", "pipeline.py")

@@ -6,6 +6,7 @@ rule cross_validation:
     input:
         rig_config=VALIDATION.get("config", "config/validation.yaml"),
         library=LIB_CORE
+        + library("core/sampler.py")
         + library(*(f"experiment/{m}.py" for m in ("__init__", "records", "analysis", "rig", "validation"))),
     output:
         table=report(

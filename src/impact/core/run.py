@@ -24,6 +24,7 @@ from .layout import (D_CAP, D_E0, D_E1, D_EMAX, D_FRICTION, D_GRAZE, D_IMPACTS, 
                      KIND_PID, KIND_TMD, MODE_FLOOR, MODE_FREE, MODE_LOCKED, MODE_STUCK, MON_ACCEL, NDIAG, NPOLY,
                      P_MAXEV, P_OMEGA, P_PERIOD, P_PHI, P_REC_DT, P_REC_T0, P_T0, P_TEND, P_TWIN, P_VSTICK, R_IMPULSE,
                      R_SIDE, R_STUCK, R_T, R_UNIT, R_V0, R_V1, R_W0, R_W1)
+from .jitcache import purge_stale_cache
 from .sampler import sample_segment
 from .segment import (bound, build_segment, config_key, config_slot, deriv_at0, derivative_row, energy, eval2,
                       int_prod, integral_tables, state_from_exp)
@@ -737,39 +738,5 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
     return irec
 
 
-def _purge_stale_cache() -> None:
-    """Drop numba's cached kernels when any module of this package changed.
 
-    numba checks only the source file of the function it loads, but run_scene
-    carries compiled copies of the other modules' functions: after an edit of
-    segment.py alone it would load stale code.  A stamp of all the package's
-    sources, kept beside the cache, catches that.
-    """
-    import fcntl
-    import hashlib
-    from pathlib import Path
-
-    here = Path(__file__).parent
-    digest = hashlib.sha256()
-    for src in sorted(here.glob("*.py")):
-        digest.update(src.name.encode() + src.read_bytes())
-    folder = Path(run_scene._cache._cache_path)
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        stamp = folder / f"impact-core-{digest.hexdigest()[:16]}.stamp"
-        if stamp.exists():
-            return
-        with open(folder / "impact-core.lock", "w") as lock:
-            fcntl.flock(lock, fcntl.LOCK_EX)
-            if not stamp.exists():
-                stems = tuple(f"{src.stem}." for src in here.glob("*.py"))
-                for old in folder.iterdir():
-                    if old.suffix in (".nbi", ".nbc", ".stamp") and old.name.startswith(stems + ("impact-core-",)):
-                        old.unlink(missing_ok=True)
-                stamp.touch()
-            fcntl.flock(lock, fcntl.LOCK_UN)
-    except OSError:
-        pass  # a read-only cache: numba falls back to compiling in memory
-
-
-_purge_stale_cache()
+purge_stale_cache(run_scene, "impact-core")

@@ -44,9 +44,10 @@ def eval2(kap, c, p, tau):
             z = ck * np.exp(kap[k] * tau)
             h += z.real
             dh += (z * kap[k]).real
-    h += poly_at(p, tau)
-    dh += p[1] + tau * (2.0 * p[2] + 3.0 * tau * p[3])
-    return h, dh
+    # this order of sums, with p[0] and p[3] last, makes a row with p[0] = p[3] = 0 give the very bits
+    # of the paper kernel's h + p1 tau + p2 tau^2: both kernels share this search and must not drift apart
+    return (h + p[1] * tau + p[2] * tau * tau + p[0] + p[3] * tau * tau * tau,
+            dh + p[1] + 2.0 * p[2] * tau + 3.0 * p[3] * tau * tau)
 
 
 @njit(cache=True)

@@ -45,6 +45,8 @@ import numpy as np
 from numba import njit
 
 from .. import _kernels as K
+from ..core.jitcache import purge_stale_cache
+from ..core.sampler import paper_free_flight, paper_state
 from ..params import Protocol, System
 from ..simulate import STICK_VELOCITY, ensure_compiled, initial_state, param_vector as model_param_vector, pid_data
 from . import rig as R
@@ -240,8 +242,8 @@ def _model_chunk_dense(p, z, code, pid, ta, tb, ts, i0, i1, xs, ss, rec, diag, z
     """One call of the production kernel over [ta, tb]; samples ts[i0:i1] in (ta, tb] rebuilt from its events.
 
     Between impacts the kernel's motion is the closed-form free flight from
-    the post-impact state (``_build_free`` / ``_state``, the kernel's own
-    functions), so the samples are exact.  Returns (new code, ok): ok = False
+    the post-impact state (the kernel's own closed form, through the public
+    sampler :mod:`impact.core.sampler`), so the samples are exact.  Returns (new code, ok): ok = False
     when the chunk contains a sticking episode (a release is not recorded) or
     more impacts than ``rec`` holds -- then the caller re-runs it sample by
     sample.
@@ -264,7 +266,7 @@ def _model_chunk_dense(p, z, code, pid, ta, tb, ts, i0, i1, xs, ss, rec, diag, z
     t_seg = ta
     half = 0.5 * p[K.P_D]
     j = 0
-    K._build_free(kap, cx, cy, poly, zs, t_seg, p, pid, None, 0)
+    paper_free_flight(kap, cx, cy, poly, zs, t_seg, p, pid)
     for i in range(i0, i1):
         while j < nr and rec[j, 0] <= ts[i]:
             side = rec[j, 1]
@@ -273,9 +275,9 @@ def _model_chunk_dense(p, z, code, pid, ta, tb, ts, i0, i1, xs, ss, rec, diag, z
             zs[2] = rec[j, 2] + side * half
             zs[3] = rec[j, 6]
             t_seg = rec[j, 0]
-            K._build_free(kap, cx, cy, poly, zs, t_seg, p, pid, None, 0)
+            paper_free_flight(kap, cx, cy, poly, zs, t_seg, p, pid)
             j += 1
-        K._state(kap, cx, cy, poly[0], poly[1], ts[i] - t_seg, zt)
+        paper_state(kap, cx, cy, poly, ts[i] - t_seg, zt)
         xs[i] = zt[0]
         ss[i] = zt[2] - zt[0]
     return code_new, True
@@ -1415,3 +1417,6 @@ def run_validation(cfg: dict | None, out_dir, cases=None, *, smoke: bool = False
                      "synthetic": True, "source": "virtual rig vs Eq. (4) model; not the paper's data"}
     _write_text(out / "claims.json", json.dumps(_jsonable(claims), indent=2, sort_keys=True) + "\n")
     return table
+
+
+purge_stale_cache(_model_samples, "impact-experiment")
