@@ -15,7 +15,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .segment import bound, deriv_at0, eval2, eval3
+from .segment import bound, bound_tab, deriv_at0, eval2, eval3
 
 HMIN = 1e-12       # smallest step before a touch is declared tangential
 _EPS = 2.220446049250313e-16
@@ -212,7 +212,7 @@ def _ends(kap, ek, c, p, big_t):
 
 
 @njit(cache=True)
-def peak_abs(kap, ek, c, p, big_t, peak, stack):
+def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
     """max(peak, max |h| over [0, T]), certified to PEAK_RTOL.
 
     Branch and bound: an interval whose bound cannot beat the running peak is
@@ -220,7 +220,7 @@ def peak_abs(kap, ek, c, p, big_t, peak, stack):
     there; around it h'' keeps its sign over a radius |h''| / M3, so h has no
     other extremum there and only the rest needs searching.  An interval where
     h' provably keeps its sign is monotone: its ends hold its extremes.
-    ek = exp(kap T); stack: (n, 4) work array.  Returns the new peak and the time where it is
+    kpow: kappa_powers of kap; ek = exp(kap T); stack: (n, 4) work array.  Returns the new peak and the time where it is
     attained (-1 if the old peak stands, -2 if the search gave up).
     """
     h0, d0, h1, d1 = _ends(kap, ek, c, p, big_t)
@@ -231,10 +231,10 @@ def peak_abs(kap, ek, c, p, big_t, peak, stack):
     if abs(h1) > peak:
         peak = abs(h1)
         at = big_t
-    m2 = bound(kap, c, p, 2, big_t)
+    m2 = bound_tab(kpow, c, p, 2, big_t)
     if max(abs(h0), abs(h1)) + m2 * big_t * big_t / 8.0 <= peak * (1.0 + PEAK_RTOL):
         return peak, at
-    m3 = bound(kap, c, p, 3, big_t)
+    m3 = bound_tab(kpow, c, p, 3, big_t)
     stack[0, 0] = 0.0
     stack[0, 1] = big_t
     stack[0, 2] = d0

@@ -26,14 +26,14 @@ from .layout import (D_CAP, D_E0, D_E1, D_EMAX, D_FRICTION, D_GRAZE, D_IMPACTS, 
                      R_SIDE, R_STUCK, R_T, R_UNIT, R_V0, R_V1, R_W0, R_W1)
 from .jitcache import purge_stale_cache
 from .sampler import sample_segment
-from .segment import (bound, build_segment, config_key, config_slot, deriv_at0, derivative_row, energy, eval2,
+from .segment import (bound, bound_tab, build_segment, kappa_powers, config_key, config_slot, deriv_at0, derivative_row, energy, eval2,
                       int_prod, integral_tables, state_from_exp)
 
 EV_NONE, EV_WALL, EV_SLIDE_STOP, EV_RELEASE, EV_FLOOR_EXIT = 0, 1, 2, 3, 4
 _TOL = 1e-12  # contact tolerance, relative to the size of the gap function
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def record_value(record, p, t):
     """(r0, r1, t_next): the record's value and slope at t, and its next sample time."""
     t0 = p[P_REC_T0]
@@ -59,7 +59,7 @@ def record_value(record, p, t):
     return record[i] + slope * (t - t_i), slope, t_next
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _gap_row(C, P, nf, j, f, cs, ps):
     for k in range(C.shape[1]):
         cs[k] = C[nf + j, k] - C[f, k]
@@ -79,7 +79,7 @@ def _unit_level(j, units, springs, fric):
     return level
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _same_unit_state(j, nf, units, mode, side, sigma, escape, escape_v, C, P):
     i = j - 1
     kind, floor, mass, load, gap, rest = units
@@ -98,10 +98,32 @@ def _same_unit_state(j, nf, units, mode, side, sigma, escape, escape_v, C, P):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
+def _clear_of_walls(kpow, ek, c, p, lo, hi, big_t, delta):
+    """Certified: h stays inside (lo, hi) over [0, T] and ends farther than delta from both walls.
+
+    The first step of first_exit over the whole segment, with h(T) from ek = exp(kap T): most sample
+    steps of a record are settled by it without evaluating an exponential.
+    """
+    h0 = p[0]
+    h1 = p[0] + big_t * (p[1] + big_t * (p[2] + big_t * p[3]))
+    for k in range(c.shape[0]):
+        ck = c[k]
+        if ck.real != 0.0 or ck.imag != 0.0:
+            h0 += ck.real
+            h1 += (ck * ek[k]).real
+    spread = bound_tab(kpow, c, p, 2, big_t) * big_t * big_t / 8.0
+    return (max(h0, h1) + spread < hi and min(h0, h1) - spread > lo
+            and hi - h1 >= delta and h1 - lo >= delta)
+
+
+@njit(cache=True, inline='always')
 def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape, escape_v, tau_max,
-                  r0, r1, ev_t, ev_side, ev_kind, cs, ps, cq, pq, out, diag):
-    """Next event of every unit; returns the earliest time (inf if none up to tau_max)."""
+                  r0, r1, ev_t, ev_side, ev_kind, cs, ps, cq, pq, out, kpow, ek, ek_tau, diag):
+    """Next event of every unit; returns the earliest time (inf if none up to tau_max).
+
+    ek = exp(kap ek_tau): when ek_tau is tau_max, a unit far from its walls is cleared without a search.
+    """
     ukind, ufloor, um, uload, ud = units[0], units[1], units[2], units[3], units[4]
     best = tau_max
     for j in range(um.shape[0]):
@@ -121,8 +143,13 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
         out[3] = 0.0
         if mode[j] == MODE_FREE:
             _gap_row(C, P, nf, j, f, cs, ps)
-            delta = _TOL * (bound(kap, cs, ps, 0, 0.0) + ud[j])
-            first_exit(kap, cs, ps, -half, half, best, escape[j], delta, out)
+            delta = _TOL * (bound_tab(kpow, cs, ps, 0, 0.0) + ud[j])
+            if escape[j] == 0 and best == ek_tau and _clear_of_walls(kpow, ek, cs, ps, -half, half, best, delta):
+                out[0] = np.inf
+                out[1] = 0.0
+                out[3] = 1.0
+            else:
+                first_exit(kap, cs, ps, -half, half, best, escape[j], delta, out)
             diag[D_GRAZE] += out[2]
             diag[D_STEPS] += out[3]
             if out[0] <= best:
@@ -138,7 +165,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
                         cq[k] = sigma[j] * cq[k]
                     for k in range(NPOLY):
                         pq[k] = sigma[j] * pq[k]
-                    dv = _TOL * bound(kap, cq, pq, 0, 0.0)
+                    dv = _TOL * bound_tab(kpow, cq, pq, 0, 0.0)
                     first_exit(kap, cq, pq, 0.0, np.inf, best, escape_v[j], dv, out)
                     diag[D_STEPS] += out[3]
                     if out[0] < best:
@@ -149,7 +176,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
         elif mode[j] == MODE_STUCK:
             stuck_row(kap, C, P, f, side[j], uload[j] * r0, uload[j] * r1,
                       _unit_level(j, units, springs, fric), cq, pq)
-            delta = _TOL * bound(kap, cq, pq, 0, 0.0)
+            delta = _TOL * bound_tab(kpow, cq, pq, 0, 0.0)
             q0 = deriv_at0(kap, cq, pq, 0)
             esc = 1 if -q0 < delta else 0
             first_exit(kap, cq, pq, -np.inf, 0.0, best, esc, delta, out)
@@ -163,7 +190,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
             if fric is not None:
                 a_f = fric[j]
                 floor_row(kap, C, P, f, uload[j] * r0, uload[j] * r1, cq, pq)
-                delta = _TOL * (bound(kap, cq, pq, 0, 0.0) + a_f)
+                delta = _TOL * (bound_tab(kpow, cq, pq, 0, 0.0) + a_f)
                 q0 = deriv_at0(kap, cq, pq, 0)
                 esc = 0
                 if a_f - abs(q0) < delta:
@@ -182,7 +209,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
     return found
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def integrate_segment(kap, C, P, tau, nf, building, units, springs, mode, load_vec, harm, record, theta0,
                       r0, r1, pair, single, cv, pv, cu, pu, diag):
     """Exact work of the load, viscous dissipation and stuck time over [0, tau] (tables: integral_tables)."""
@@ -258,8 +285,8 @@ def _shift_row(kap, c, p, a, cs, ps):
     ps[3] = p[3]
 
 
-@njit(cache=True)
-def monitor_segment(kap, ek, C, P, tau, t, t_win, mon_rows, mon_kind, mon_rec, r0, r1, pair, single,
+@njit(cache=True, inline='always')
+def monitor_segment(kap, kpow, ek, C, P, tau, t, t_win, mon_rows, mon_kind, mon_rec, r0, r1, pair, single,
                     cm, pm, cs, ps, stack, mon_peak, mon_peak_t, mon_x2, diag):
     """Certified peaks of every monitor over the segment, and its square integrated over the window."""
     nt = kap.shape[0]
@@ -282,7 +309,7 @@ def monitor_segment(kap, ek, C, P, tau, t, t_win, mon_rows, mon_kind, mon_rec, r
             pm[1] = 6.0 * pm[3] + mon_rec[m] * r1
             pm[2] = 0.0
             pm[3] = 0.0
-        peak, at = peak_abs(kap, ek, cm, pm, tau, mon_peak[m], stack)
+        peak, at = peak_abs(kap, kpow, ek, cm, pm, tau, mon_peak[m], stack)
         if at == -2.0:
             diag[D_PEAK_GAVE_UP] += 1.0
         elif at >= 0.0:
@@ -390,7 +417,7 @@ def plastic_merge(j, nf, building, units, mode, side, q, v, diag):
 
 @njit(cache=True)
 def settle(t, p, nf, building, units, springs, fric, load_vec, harm, record, mode, side, sigma, offset, escape,
-           escape_v, check, q, v, cache, cursor, kap, C, P, cs, ps, cq, pq, diag):
+           escape_v, check, q, v, cache, cursor, kap, C, P, cs, ps, cq, pq, work, diag):
     """Decide, at one instant, which units the walls or the floor keep holding.
 
     check[j]: 1 a unit that just rebounded (is its rebound resolvable?), 2 a
@@ -410,7 +437,7 @@ def settle(t, p, nf, building, units, springs, fric, load_vec, harm, record, mod
     for _ in range(2 * nu + 2):
         s = config_slot(building, units, springs, load_vec, omega if harm is not None else 0.0, mode, cache, cursor)
         build_segment(s, cache, units, fric, mode, offset, sigma, nf, q, v, r0, r1, harm is not None, theta0,
-                      omega, kap, C, P)
+                      omega, kap, C, P, work)
         # every unit is judged on the same segment, so identical units decide alike
         changed = False
         for j in range(nu):
@@ -586,6 +613,8 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
     single = np.zeros((nt, NPOLY), dtype=np.complex128)
     tab_key = -1
     tab_tau = -1.0
+    kpow = np.zeros((5, nt))
+    kpow_key = -1
     slot_key = -1
     s = 0
     cv = np.zeros((nfull, nt), dtype=np.complex128)
@@ -598,6 +627,8 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
     vs = np.zeros(nfull)
     v_before = np.zeros(nfull)
     cursor = np.zeros(1, dtype=np.int64)
+    nmax = cache[5].shape[1]
+    work = (np.zeros(5 * nmax), np.zeros(4 * nmax, dtype=np.complex128))
     ev_t = np.zeros(nu)
     ev_side = np.zeros(nu, dtype=np.int64)
     ev_kind = np.zeros(nu, dtype=np.int64)
@@ -634,7 +665,7 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
     max_ev = p[P_MAXEV]
     vstick = p[P_VSTICK]
     settle(t, p, nf, building, units, springs, fric, load_vec, harm, record, mode, side, sigma, offset, escape,
-           escape_v, check, q, v, cache, cursor, kap, C, P, cs, ps, cq, pq, diag)
+           escape_v, check, q, v, cache, cursor, kap, C, P, cs, ps, cq, pq, work, diag)
     diag[D_STICKS] = 0.0  # a unit placed on a wall is not a sticking episode
     diag[D_E0] = energy(building, units, springs, nf, q, v)
     diag[D_EMAX] = diag[D_E0]
@@ -664,19 +695,29 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
                             cursor)
             slot_key = key
         build_segment(s, cache, units, fric, mode, offset, sigma, nf, q, v, r0, r1, harm is not None, theta0,
-                      omega, kap, C, P)
+                      omega, kap, C, P, work)
+        if key != kpow_key:
+            kappa_powers(kap, kpow)
+            kpow_key = key
         diag[D_SEGMENTS] += 1.0
         tau_max = t_next - t
         if record is not None and t_next < t_end and abs(tau_max - p[P_REC_DT]) <= 1e-9 * p[P_REC_DT]:
             # a whole sample step: its length is the record's dt, not the difference of two rounded times,
             # so every such step shares one set of integral tables
             tau_max = p[P_REC_DT]
+        if record is not None and (key != tab_key or tau_max != tab_tau):
+            # sampled loads repeat the same step in the same configuration: the tables carry over
+            for k in range(nt):
+                ek[k] = np.exp(kap[k] * tau_max)
+            integral_tables(kap, ek, tau_max, pair, single)
+            tab_key = key
+            tab_tau = tau_max
         best = search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape, escape_v, tau_max,
-                             r0, r1, ev_t, ev_side, ev_kind, cs, ps, cq, pq, out, diag)
+                             r0, r1, ev_t, ev_side, ev_kind, cs, ps, cq, pq, out, kpow, ek,
+                             tab_tau if key == tab_key else -1.0, diag)
         event = best <= tau_max and best < np.inf
         tau = best if event else tau_max
         if key != tab_key or tau != tab_tau:
-            # sampled loads repeat the same step in the same configuration: the tables carry over
             for k in range(nt):
                 ek[k] = np.exp(kap[k] * tau)
             integral_tables(kap, ek, tau, pair, single)
@@ -684,7 +725,7 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
             tab_tau = tau
         integrate_segment(kap, C, P, tau, nf, building, units, springs, mode, load_vec, harm, record,
                           theta0, r0, r1, pair, single, cv, pv, cu, pu, diag)
-        monitor_segment(kap, ek, C, P, tau, t, t_win, mon_rows, mon_kind, mon_rec, r0, r1, pair, single, cm, pm, cs,
+        monitor_segment(kap, kpow, ek, C, P, tau, t, t_win, mon_rows, mon_kind, mon_rec, r0, r1, pair, single, cm, pm, cs,
                         ps, stack, mon_peak, mon_peak_t, mon_x2, diag)
         its = sample_segment(kap, C, P, t, tau, ts, its, samples, qs, vs)
         if fric is not None:
@@ -724,9 +765,10 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
             if n_hit > 1:
                 diag[D_SIMULTANEOUS] += 1.0
         settle(t, p, nf, building, units, springs, fric, load_vec, harm, record, mode, side, sigma, offset,
-               escape, escape_v, check, q, v, cache, cursor, kap, C, P, cs, ps, cq, pq, diag)
+               escape, escape_v, check, q, v, cache, cursor, kap, C, P, cs, ps, cq, pq, work, diag)
         slot_key = -1  # settle may have filled (and so replaced) cache slots
         tab_key = -1
+        kpow_key = -1
         if n_hit > 0:
             irec = _record_impacts(t, nf, units, mode, side, hit, ev_side, v_before, v, impulse, recs, irec)
     diag[D_E1] = energy(building, units, springs, nf, q, v)

@@ -109,6 +109,35 @@ def bound(kap, c, p, n, tau_max):
 
 
 @njit(cache=True)
+def kappa_powers(kap, kpow):
+    """kpow[n, k] = |kap_k|^n, n = 0..4, for bound_tab."""
+    for k in range(kap.shape[0]):
+        a = abs(kap[k])
+        kpow[0, k] = 1.0
+        for n in range(1, kpow.shape[0]):
+            kpow[n, k] = kpow[n - 1, k] * a
+
+
+@njit(cache=True)
+def bound_tab(kpow, c, p, n, tau_max):
+    """bound() with the powers of |kap| from a table: the scene core's hot paths call it every step."""
+    acc = 0.0
+    for k in range(c.shape[0]):
+        ck = c[k]
+        if ck.real != 0.0 or ck.imag != 0.0:
+            acc += np.sqrt(ck.real * ck.real + ck.imag * ck.imag) * kpow[n, k]
+    if n == 0:
+        acc += abs(p[0]) + tau_max * (abs(p[1]) + tau_max * (abs(p[2]) + tau_max * abs(p[3])))
+    elif n == 1:
+        acc += abs(p[1]) + tau_max * (2.0 * abs(p[2]) + 3.0 * tau_max * abs(p[3]))
+    elif n == 2:
+        acc += 2.0 * abs(p[2]) + 6.0 * tau_max * abs(p[3])
+    elif n == 3:
+        acc += 6.0 * abs(p[3])
+    return acc
+
+
+@njit(cache=True)
 def derivative_row(kap, c, p, cd, pd):
     """The derivative of a row, written into (cd, pd)."""
     for k in range(kap.shape[0]):
@@ -129,7 +158,7 @@ def state_at(kap, C, P, tau, q, v):
     state_from_exp(kap, ek, C, P, tau, q, v)
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def state_from_exp(kap, ek, C, P, tau, q, v):
     """state_at with ek = exp(kap tau) given."""
     nt = kap.shape[0]
@@ -285,13 +314,15 @@ def config_slot(building, units, springs, load_vec, omega, mode, cache, cursor):
 # a segment
 # ----------------------------------------------------------------------------
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def build_segment(s, cache, units, fric, mode, offset, sigma, nf, q, v,
-                  r0, r1, harmonic, theta0, omega, kap, C, P):
+                  r0, r1, harmonic, theta0, omega, kap, C, P, work):
     """Coefficient rows of every degree of freedom from state (q, v).
 
     r0 + r1 tau: the record's value on the segment (per unit of load_vec);
     harmonic: the load is sin(theta0 + omega tau) per unit of load_vec.
+    work = (floats, complexes): scratch of 5 and 4 times the largest reduced size, so that a
+    segment allocates nothing.
     """
     keys, nr, lam, vec, vinv, kinv, cred, fidx, ellr, zc = cache
     ufloor, um, uload = units[1], units[2], units[3]
@@ -304,8 +335,13 @@ def build_segment(s, cache, units, fric, mode, offset, sigma, nf, q, v,
     if harmonic:
         kap[nt - 2] = 1j * omega
         kap[nt - 1] = -1j * omega
-    g0 = np.empty(n)
-    g1 = np.empty(n)
+    wf, wc = work
+    g0 = wf[0:n]
+    g1 = wf[n:2 * n]
+    u1 = wf[2 * n:3 * n]
+    qp = wf[3 * n:4 * n]
+    tmp = wf[4 * n:5 * n]
+    dz = wc[0:2 * n]
     for i in range(n):
         g0[i] = ellr[s, i] * r0
         g1[i] = ellr[s, i] * r1
@@ -314,12 +350,13 @@ def build_segment(s, cache, units, fric, mode, offset, sigma, nf, q, v,
             if mode[j] == MODE_FREE and fric[j] > 0.0:
                 # a sliding mass drags its floor along with m a_f sigma
                 g0[ufloor[j]] += um[j] * fric[j] * sigma[j]
-    u1 = np.zeros(n)
-    qp = np.zeros(n)
+    for i in range(n):
+        u1[i] = 0.0
+        qp[i] = 0.0
+        tmp[i] = g0[i]
     for i in range(n):
         for j in range(n):
             u1[i] += kinv[s, i, j] * g1[j]
-    tmp = g0.copy()
     for i in range(n):
         for j in range(n):
             tmp[i] -= cred[s, i, j] * u1[j]
@@ -327,7 +364,6 @@ def build_segment(s, cache, units, fric, mode, offset, sigma, nf, q, v,
         for j in range(n):
             qp[i] += kinv[s, i, j] * tmp[j]
     ph = np.exp(1j * theta0)
-    dz = np.empty(2 * n, dtype=np.complex128)
     for i in range(n):
         full = fidx[s, i]
         dz[i] = q[full] - qp[i]
@@ -335,15 +371,18 @@ def build_segment(s, cache, units, fric, mode, offset, sigma, nf, q, v,
         if harmonic:
             dz[i] -= (zc[s, i] * ph).imag
             dz[n + i] -= (zc[s, n + i] * ph).imag
+    w = wc[2 * n:4 * n]  # the modal amplitudes, once for every row
+    for k in range(2 * n):
+        wk = 0.0 + 0.0j
+        for l in range(2 * n):
+            wk += vinv[s, k, l] * dz[l]
+        w[k] = wk
     for i in range(n):
         full = fidx[s, i]
         for k in range(nt):
             C[full, k] = 0.0
         for k in range(2 * n):
-            wk = 0.0 + 0.0j
-            for l in range(2 * n):
-                wk += vinv[s, k, l] * dz[l]
-            C[full, k] = vec[s, i, k] * wk
+            C[full, k] = vec[s, i, k] * w[k]
         if harmonic:
             ch = zc[s, i] * ph / 2j
             C[full, nt - 2] = ch
@@ -375,7 +414,7 @@ def build_segment(s, cache, units, fric, mode, offset, sigma, nf, q, v,
             P[row, 3] = a1 / 6.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _copy_identical_rows(units, mode, nf, q, v, C, P):
     """Identical spring units in identical states move identically: give them the same row, bit for bit.
 
@@ -496,7 +535,7 @@ def int_prod(big_t, pair, single, ca, pa, cb, pb):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def energy(building, units, springs, nf, q, v):
     """Kinetic plus elastic energy of the scene (relative coordinates)."""
     mb, kb, _ = building
