@@ -505,35 +505,27 @@ def int_prod(big_t, pair, single, ca, pa, cb, pb):
         return 0.0
     nt = ca.shape[0]
     acc = 0.0 + 0.0j
+    # plain multiply-adds, no tests for zero coefficients: the branches cost more than they save
     for j in range(nt):
-        aj = ca[j]
-        if aj.real == 0.0 and aj.imag == 0.0:
-            continue
         inner = 0.0 + 0.0j
         for l in range(nt):
-            bl = cb[l]
-            if bl.real != 0.0 or bl.imag != 0.0:
-                inner += bl * pair[j, l]
+            inner += cb[l] * pair[j, l]
+        cross = 0.0 + 0.0j
         for m in range(NPOLY):
-            if pb[m] != 0.0:
-                inner += pb[m] * single[j, m]
-        acc += aj * inner
-    for l in range(nt):
-        bl = cb[l]
-        if bl.real == 0.0 and bl.imag == 0.0:
-            continue
-        for m in range(NPOLY):
-            if pa[m] != 0.0:
-                acc += bl * pa[m] * single[l, m]
+            inner += pb[m] * single[j, m]
+            cross += pa[m] * single[j, m]
+        acc += ca[j] * inner + cb[j] * cross
     out = acc.real
     for i in range(NPOLY):
         if pa[i] == 0.0:
             continue
         for j in range(NPOLY):
             if pb[j] != 0.0:
-                out += pa[i] * pb[j] * big_t ** (i + j + 1) / (i + j + 1)
+                tp = big_t
+                for _ in range(i + j):
+                    tp *= big_t
+                out += pa[i] * pb[j] * tp / (i + j + 1)
     return out
-
 
 @njit(cache=True, inline='always')
 def energy(building, units, springs, nf, q, v):
