@@ -20,7 +20,8 @@ $(STAMP): pyproject.toml
 setup: $(STAMP)
 
 study: $(STAMP)
-	$(BIN)/snakemake --cores $(CORES)
+	@start=$$(date +%s); $(BIN)/snakemake --cores $(CORES); status=$$?; \
+	echo "study wall time: $$(( $$(date +%s) - start )) s"; exit $$status
 
 smoke: $(STAMP)
 	$(BIN)/snakemake --cores $(CORES) --configfile config/smoke.yaml

@@ -97,15 +97,21 @@ def bound(kap, c, p, n, tau_max):
     acc = 0.0
     for k in range(kap.shape[0]):
         acc += abs(c[k]) * abs(kap[k]) ** n
+    return acc + poly_bound(p, n, tau_max)
+
+
+@njit(cache=True)
+def poly_bound(p, n, tau_max):
+    """Bound on |n-th derivative| of the polynomial part over [0, tau_max]."""
     if n == 0:
-        acc += abs(p[0]) + tau_max * (abs(p[1]) + tau_max * (abs(p[2]) + tau_max * abs(p[3])))
-    elif n == 1:
-        acc += abs(p[1]) + tau_max * (2.0 * abs(p[2]) + 3.0 * tau_max * abs(p[3]))
-    elif n == 2:
-        acc += 2.0 * abs(p[2]) + 6.0 * tau_max * abs(p[3])
-    elif n == 3:
-        acc += 6.0 * abs(p[3])
-    return acc
+        return abs(p[0]) + tau_max * (abs(p[1]) + tau_max * (abs(p[2]) + tau_max * abs(p[3])))
+    if n == 1:
+        return abs(p[1]) + tau_max * (2.0 * abs(p[2]) + 3.0 * tau_max * abs(p[3]))
+    if n == 2:
+        return 2.0 * abs(p[2]) + 6.0 * tau_max * abs(p[3])
+    if n == 3:
+        return 6.0 * abs(p[3])
+    return 0.0
 
 
 @njit(cache=True)
@@ -126,15 +132,7 @@ def bound_tab(kpow, c, p, n, tau_max):
         ck = c[k]
         if ck.real != 0.0 or ck.imag != 0.0:
             acc += np.sqrt(ck.real * ck.real + ck.imag * ck.imag) * kpow[n, k]
-    if n == 0:
-        acc += abs(p[0]) + tau_max * (abs(p[1]) + tau_max * (abs(p[2]) + tau_max * abs(p[3])))
-    elif n == 1:
-        acc += abs(p[1]) + tau_max * (2.0 * abs(p[2]) + 3.0 * tau_max * abs(p[3]))
-    elif n == 2:
-        acc += 2.0 * abs(p[2]) + 6.0 * tau_max * abs(p[3])
-    elif n == 3:
-        acc += 6.0 * abs(p[3])
-    return acc
+    return acc + poly_bound(p, n, tau_max)
 
 
 @njit(cache=True)
