@@ -382,3 +382,28 @@ def test_a_scene_compiles_only_what_it_uses():
     springs, fric, harm, record = out.stdout.split()
     assert (springs, fric, harm) == ("none", "none", "none")
     assert record.startswith("array")
+
+
+def test_units_sharing_a_wall_settle_instead_of_chattering_forever():
+    """Three CIDs on one floor, low restitution: units resting on a wall that another unit hits are judged
+    like any slow rebound (found by review: they used to ping-pong until the event cap)."""
+    dampers = (Damper("cid", 0.03, gap=0.3, e=0.3), Damper("cid", 0.05, gap=0.2, e=0.2),
+               Damper("cid", 0.02, gap=0.25, e=0.1))
+    res = simulate_scene(Scene(Building.paper(0.05), dampers, Harmonic(0.1, 1.0), duration=400.0))
+    d = res.diagnostics
+    assert not d["event_cap_reached"] and math.isfinite(res.rms_roof_displacement)
+    assert d["sticking_episodes"] > 100
+    assert abs(d["energy_residual"]) <= 1e-9
+
+
+def test_undamped_resonance_and_bad_windows_are_refused():
+    with pytest.raises(ValueError, match="undamped mode"):
+        simulate_scene(Scene(Building.paper(0.0), (Damper("cid", 0.01, gap=0.2, e=0.5),), Harmonic(0.1, 1.0),
+                             duration=50.0))
+    b = Building.paper(0.05)
+    with pytest.raises(ParameterError, match="window"):
+        Scene(b, (), Harmonic(0.1, 1.0), duration=50.0, window=60.0)
+    with pytest.raises(ParameterError, match="window"):
+        Scene(b, (), Harmonic(0.1, 1.0), duration=50.0, window=-1.0)
+    with pytest.raises(ParameterError, match="gap"):
+        Damper("tmd", 1.0, gap=0.1, damping=0.05)

@@ -70,8 +70,8 @@ class Damper:
             raise ParameterError(f"units = {self.units!r} is out of range: allowed integers [1, 60]")
         if self.nu > 0.0 and self.kind != "cid":
             raise ParameterError("nu is only defined for kind 'cid' (only a free mass slides on a floor)")
-        if self.kind == "tmd" and self.damping == 0.0 and self.gap:
-            raise ParameterError("a TMD has no walls: leave gap at 0")
+        if self.kind == "tmd" and self.gap:
+            raise ParameterError("gap is not defined for kind 'tmd' (a TMD has no walls): leave it at 0")
 
     @property
     def has_walls(self) -> bool:
@@ -141,7 +141,10 @@ class ForceRecord:
             raise ParameterError("values must be a finite 1-d array of at least two samples")
         _check("dt", self.dt, 0.0, 1e3, lo_open=True)
         object.__setattr__(self, "values", v)
-        object.__setattr__(self, "distribution", np.atleast_1d(np.asarray(self.distribution, dtype=float)))
+        dist = np.atleast_1d(np.asarray(self.distribution, dtype=float))
+        if dist.ndim != 1 or not np.all(np.isfinite(dist)):
+            raise ParameterError("distribution must be a finite 1-d array: one weight per floor (and unit)")
+        object.__setattr__(self, "distribution", dist)
 
     @property
     def duration(self) -> float:
@@ -183,6 +186,12 @@ class Scene:
             raise ParameterError("duration is required for a harmonic load")
         if self.duration is not None:
             _check("duration", self.duration, 0.0, 1e9, lo_open=True)
+        if self.window is not None:
+            _check("window", self.window, 0.0, self.t_end, hi_open=True)
+        _check("gravity", self.gravity, 0.0, 1e6, lo_open=True)
+        if int(self.max_events_per_period) < 10:
+            raise ParameterError(f"max_events_per_period = {self.max_events_per_period} is out of range: "
+                                 "allowed integers >= 10")
         if len(self.unit_list()) > 60:
             raise ParameterError("at most 60 damper units in one scene")
 

@@ -270,7 +270,7 @@ def integrate_segment(kap, C, P, tau, nf, building, units, springs, mode, load_v
                 visc += uc[j] * int_prod(tau, pair, single, cu[0], pu[0], cu[0], pu[0])
     diag[D_VISC] += visc
     for j in range(mode.shape[0]):
-        if mode[j] != MODE_FREE:
+        if mode[j] != MODE_FREE and mode[j] != MODE_LOCKED:
             diag[D_STUCKTIME] += tau
 
 
@@ -384,6 +384,9 @@ def impacts_on_floor(f, nf, building, units, mode, side, q, v, hit, ev_side, imp
         if g < 0:
             continue
         v[nf + j] -= sd[g] * imp[g] * minv[g]
+        if not hit[j] and imp[g] > 0.0:
+            # a resting unit that its wall keeps: it moves with its floor, exactly rather than to round-off
+            v[nf + j] = v[f]
         ke1 += 0.5 * um[j] * v[nf + j] * v[nf + j]
         impulse_out[j] = imp[g]
         if hit[j]:
@@ -567,9 +570,11 @@ def resolve_events(t, tau_ev, nf, building, units, fric, mode, side, sigma, offs
                 escape[j] = side[j]
                 check[j] = 1
         elif mode[j] == MODE_STUCK and floors_done[f] and side[j] * (v[nf + j] - v[f]) < 0.0:
-            # its wall moved away under another unit's impact
+            # its wall moved away under another unit's impact; a separation too slow to resolve
+            # is judged in settle like any slow rebound
             mode[j] = MODE_FREE
             escape[j] = side[j]
+            check[j] = 1
             if fric is not None:
                 sigma[j] = -side[j]
         elif mode[j] == MODE_FLOOR and floors_done[f] and v[nf + j] != v[f]:

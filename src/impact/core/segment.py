@@ -298,7 +298,11 @@ def config_slot(building, units, springs, load_vec, omega, mode, cache, cursor):
             if abs(modal[k]) <= 1e-13 * size:
                 modal[k] = 0.0
             else:
-                modal[k] = modal[k] / (1j * omega - cache[2][s, k])
+                gap = 1j * omega - cache[2][s, k]
+                if abs(gap) <= 1e-12 * abs(cache[2][s, k]):
+                    raise ValueError("the harmonic load drives an undamped mode at its natural frequency: "
+                                     "the forced response is unbounded (add damping or change the frequency)")
+                modal[k] = modal[k] / gap
         for i in range(2 * n):
             acc = 0.0 + 0.0j
             for k in range(2 * n):
