@@ -107,12 +107,9 @@ def cmd_run(args) -> dict:
 
 def _run_units(system: System, args) -> dict:
     """A multi-unit damper (--units N > 1) on the scene core: N units of mass mu/N, gap d each."""
-    from .scene import amplitude, paper_scene, simulate_scene
+    from .scene import amplitude, paper_scene_from_system, simulate_scene
 
-    gravity = system.friction_accel / system.nu if system.nu > 0 else 9.80665
-    scene = paper_scene(system.kind, system.mu, system.beta, system.e, system.gap, args.r, rp=system.rp,
-                        force_ratio=system.force_ratio, periods=args.periods, average_from=args.average_from,
-                        start=args.start, units=args.units, nu=system.nu, gravity=gravity, phase=system.phase)
+    scene = paper_scene_from_system(system, args.r, _protocol(args), units=args.units)
     res = simulate_scene(scene)
     amp = amplitude(res)
     cycles = (scene.t_end - scene.t_window) * args.r / (2.0 * math.pi)

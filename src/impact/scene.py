@@ -15,7 +15,6 @@ motion decays freely until the scene's duration ends.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -490,10 +489,16 @@ def paper_scene(kind: str, mu: float, beta: float, e: float, gap: float, r: floa
                  window=average_from * period, start=start, gravity=gravity)
 
 
+def paper_scene_from_system(system, r: float, protocol, units: int = 1) -> Scene:
+    """The scene of one run of the paper kernel (impact.params System and Protocol), optionally multi-unit."""
+    # friction's scale in model units is carried by the system; as the scene's gravity it is a_f / nu
+    gravity = system.friction_accel / system.nu if system.nu > 0 else G_GRAV
+    return paper_scene(system.kind, system.mu, system.beta, system.e, system.gap, r, rp=system.rp,
+                       force_ratio=system.force_ratio, periods=protocol.periods, average_from=protocol.average_from,
+                       start=protocol.start, units=units, nu=system.nu, gravity=gravity, phase=system.phase)
+
+
 def amplitude(result: SceneResult) -> float:
     """The paper's amplitude sqrt(2) RMS of the roof over the window."""
     return math.sqrt(2.0) * result.rms_roof_displacement
 
-
-def replace(scene: Scene, **changes) -> Scene:
-    return dataclasses.replace(scene, **changes)

@@ -11,12 +11,14 @@ catches that and drops the cached kernels of that folder once.
 from __future__ import annotations
 
 import fcntl
+import functools
 import hashlib
 from pathlib import Path
 
 CORE = Path(__file__).parent
 
 
+@functools.cache  # three modules purge at import; the sources are read once per process
 def sources_digest() -> str:
     digest = hashlib.sha256()
     for src in sorted(CORE.glob("*.py")) + [CORE.parent / "_kernels.py"]:

@@ -20,14 +20,15 @@ from numba import njit
 from .contact import floor_decision, floor_mass, floor_row, solve_impulses, stays, stuck_row
 from .events import first_exit, peak_abs
 from .layout import (D_CAP, D_E0, D_E1, D_EMAX, D_FRICTION, D_GRAZE, D_IMPACTS, D_IMPACTS_WIN, D_IMPLOSS, D_NREC,
-                     D_PEAK_GAVE_UP, D_PEN, D_SEGMENTS, D_SIMULTANEOUS, D_STEPS, D_STICKS, D_STUCKTIME, D_TEND, D_VISC, D_WORK,
+                     D_PEAK_GAVE_UP, D_PEN, D_SEGMENTS, D_SIMULTANEOUS, D_STEPS, D_STICKS, D_STUCKTIME, D_TEND,
+                     D_VISC, D_WORK,
                      KIND_PID, KIND_TMD, MODE_FLOOR, MODE_FREE, MODE_LOCKED, MODE_STUCK, MON_ACCEL, NDIAG, NPOLY,
                      P_MAXEV, P_OMEGA, P_PERIOD, P_PHI, P_REC_DT, P_REC_T0, P_T0, P_TEND, P_TWIN, P_VSTICK, R_IMPULSE,
                      R_SIDE, R_STUCK, R_T, R_UNIT, R_V0, R_V1, R_W0, R_W1)
 from .jitcache import purge_stale_cache
 from .sampler import sample_segment
-from .segment import (bound, bound_tab, build_segment, kappa_powers, config_key, config_slot, deriv_at0, derivative_row, energy, eval2,
-                      int_prod, integral_tables, state_from_exp)
+from .segment import (bound, bound_tab, build_segment, config_key, config_slot, deriv_at0, derivative_row, energy,
+                      int_prod, integral_tables, kappa_powers, same_unit, state_from_exp)
 
 EV_NONE, EV_WALL, EV_SLIDE_STOP, EV_RELEASE, EV_FLOOR_EXIT = 0, 1, 2, 3, 4
 _TOL = 1e-12  # contact tolerance, relative to the size of the gap function
@@ -80,11 +81,9 @@ def _unit_level(j, units, springs, fric):
 
 
 @njit(cache=True, inline='always')
-def _same_unit_state(j, nf, units, mode, side, sigma, escape, escape_v, C, P):
+def _same_unit_state(j, nf, units, springs, mode, side, sigma, escape, escape_v, C, P):
     i = j - 1
-    kind, floor, mass, load, gap, rest = units
-    if kind[i] != kind[j] or floor[i] != floor[j] or mass[i] != mass[j] or load[i] != load[j] \
-            or gap[i] != gap[j] or rest[i] != rest[j]:
+    if not same_unit(units, springs, i, j):
         return False
     if mode[i] != mode[j] or side[i] != side[j] or sigma[i] != sigma[j] or escape[i] != escape[j] \
             or escape_v[i] != escape_v[j]:
@@ -133,7 +132,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
             continue
         f = ufloor[j]
         half = 0.5 * ud[j]
-        if j > 0 and _same_unit_state(j, nf, units, mode, side, sigma, escape, escape_v, C, P):
+        if j > 0 and _same_unit_state(j, nf, units, springs, mode, side, sigma, escape, escape_v, C, P):
             # identical to the unit before (a multi-unit damper moving as one): the same event, bit for bit
             ev_t[j] = ev_t[j - 1]
             ev_side[j] = ev_side[j - 1]
@@ -439,7 +438,7 @@ def settle(t, p, nf, building, units, springs, fric, load_vec, harm, record, mod
         theta0 = omega * t + p[P_PHI]
     for _ in range(2 * nu + 2):
         s = config_slot(building, units, springs, load_vec, omega if harm is not None else 0.0, mode, cache, cursor)
-        build_segment(s, cache, units, fric, mode, offset, sigma, nf, q, v, r0, r1, harm is not None, theta0,
+        build_segment(s, cache, units, springs, fric, mode, offset, sigma, nf, q, v, r0, r1, harm is not None, theta0,
                       omega, kap, C, P, work)
         # every unit is judged on the same segment, so identical units decide alike
         changed = False
@@ -644,6 +643,7 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
     escape_v = np.zeros(nu, dtype=np.int64)
     sigma = np.zeros(nu, dtype=np.int64)
     offset = np.zeros(nu)
+    s_before = np.zeros(nu)
     mode = mode0.copy()
     side = side0.copy()
     q = q0.copy()
@@ -699,7 +699,7 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
             s = config_slot(building, units, springs, load_vec, omega if harm is not None else 0.0, mode, cache,
                             cursor)
             slot_key = key
-        build_segment(s, cache, units, fric, mode, offset, sigma, nf, q, v, r0, r1, harm is not None, theta0,
+        build_segment(s, cache, units, springs, fric, mode, offset, sigma, nf, q, v, r0, r1, harm is not None, theta0,
                       omega, kap, C, P, work)
         if key != kpow_key:
             kappa_powers(kap, kpow)
@@ -730,18 +730,19 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
             tab_tau = tau
         integrate_segment(kap, C, P, tau, nf, building, units, springs, mode, load_vec, harm, record,
                           theta0, r0, r1, pair, single, cv, pv, cu, pu, diag)
-        monitor_segment(kap, kpow, ek, C, P, tau, t, t_win, mon_rows, mon_kind, mon_rec, r0, r1, pair, single, cm, pm, cs,
-                        ps, stack, mon_peak, mon_peak_t, mon_x2, diag)
+        monitor_segment(kap, kpow, ek, C, P, tau, t, t_win, mon_rows, mon_kind, mon_rec, r0, r1, pair, single,
+                        cm, pm, cs, ps, stack, mon_peak, mon_peak_t, mon_x2, diag)
         its = sample_segment(kap, C, P, t, tau, ts, its, samples, qs, vs)
         if fric is not None:
             for j in range(nu):
-                if mode[j] == MODE_FREE and fric[j] > 0.0:
-                    s_start = q[nf + j] - q[ufloor[j]]
-                    _gap_row(C, P, nf, j, ufloor[j], cs, ps)
-                    s_end, _ = eval2(kap, cs, ps, tau)
-                    # s' keeps its sign on a sliding segment: the work is exact
-                    diag[D_FRICTION] += units[2][j] * fric[j] * sigma[j] * (s_end - s_start)
+                s_before[j] = q[nf + j] - q[ufloor[j]]
         state_from_exp(kap, ek, C, P, tau, q, v)
+        if fric is not None:
+            for j in range(nu):
+                if mode[j] == MODE_FREE and fric[j] > 0.0:
+                    # s' keeps its sign on a sliding segment: the work is exact
+                    slid = q[nf + j] - q[ufloor[j]] - s_before[j]
+                    diag[D_FRICTION] += units[2][j] * fric[j] * sigma[j] * slid
         t = t_next if not event else t + tau
         for j in range(nu):
             escape[j] = 0

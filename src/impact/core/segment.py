@@ -317,7 +317,7 @@ def config_slot(building, units, springs, load_vec, omega, mode, cache, cursor):
 # ----------------------------------------------------------------------------
 
 @njit(cache=True, inline='always')
-def build_segment(s, cache, units, fric, mode, offset, sigma, nf, q, v,
+def build_segment(s, cache, units, springs, fric, mode, offset, sigma, nf, q, v,
                   r0, r1, harmonic, theta0, omega, kap, C, P, work):
     """Coefficient rows of every degree of freedom from state (q, v).
 
@@ -393,7 +393,7 @@ def build_segment(s, cache, units, fric, mode, offset, sigma, nf, q, v,
         P[full, 1] = u1[i]
         P[full, 2] = 0.0
         P[full, 3] = 0.0
-    _copy_identical_rows(units, mode, nf, q, v, C, P)
+    _copy_identical_rows(units, springs, mode, nf, q, v, C, P)
     for j in range(um.shape[0]):
         row = nf + j
         if mode[j] != MODE_FREE:
@@ -416,8 +416,21 @@ def build_segment(s, cache, units, fric, mode, offset, sigma, nf, q, v,
             P[row, 3] = a1 / 6.0
 
 
+@njit(cache=True)
+def same_unit(units, springs, i, j):
+    """Whether units i and j are identical: kind, floor, mass, load, gap, restitution, spring and dashpot."""
+    kind, floor, mass, load, gap, rest = units
+    if kind[i] != kind[j] or floor[i] != floor[j] or mass[i] != mass[j] or load[i] != load[j] \
+            or gap[i] != gap[j] or rest[i] != rest[j]:
+        return False
+    if springs is not None:
+        if springs[0][i] != springs[0][j] or springs[1][i] != springs[1][j]:
+            return False
+    return True
+
+
 @njit(cache=True, inline='always')
-def _copy_identical_rows(units, mode, nf, q, v, C, P):
+def _copy_identical_rows(units, springs, mode, nf, q, v, C, P):
     """Identical spring units in identical states move identically: give them the same row, bit for bit.
 
     The eigen-basis of a system with identical units is degenerate and
@@ -425,13 +438,12 @@ def _copy_identical_rows(units, mode, nf, q, v, C, P):
     would split a multi-unit damper's simultaneous impacts into a cascade.
     By the permutation symmetry the exact rows are equal; copying keeps them so.
     """
-    kind, floor, mass, load, gap, rest = units
-    for j in range(1, mass.shape[0]):
+    kind = units[0]
+    for j in range(1, kind.shape[0]):
         i = j - 1
         if kind[j] == KIND_CID or mode[j] != MODE_FREE or mode[i] != MODE_FREE:
             continue
-        if kind[i] != kind[j] or floor[i] != floor[j] or mass[i] != mass[j] or load[i] != load[j] \
-                or gap[i] != gap[j] or rest[i] != rest[j]:
+        if not same_unit(units, springs, i, j):
             continue
         if q[nf + i] != q[nf + j] or v[nf + i] != v[nf + j]:
             continue
