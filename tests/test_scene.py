@@ -159,6 +159,26 @@ def test_peak_is_the_true_maximum_between_samples(three_storey, el_centro):
     assert res.peak_roof_displacement - sampled <= 1e-9 * sampled  # a 5e-6 s grid is within 1e-9 of the top
 
 
+@pytest.mark.parametrize("damper", [Damper("cid", 6000.0, gap=0.05, e=0.5),
+                                    Damper("pid", 6000.0, gap=0.1, e=0.5, tuning=1.0, damping=0.02)],
+                         ids=["cid", "pid"])
+def test_every_monitor_peak_bounds_a_dense_sampling(three_storey, el_centro, damper):
+    """The modal pre-test and the stroke's cap skip only searches that cannot raise a peak."""
+    ts = np.arange(0.0, 20.0, 2e-4)
+    res = simulate_scene(Scene(three_storey, (damper,), el_centro, duration=20.0), times=ts)
+    q = res.samples["q"]
+    sampled = {"roof": np.max(np.abs(q[:, 2])),
+               "drift": np.max(np.abs(np.diff(np.column_stack([np.zeros(len(ts)), q[:, :3]]), axis=1))),
+               "stroke": np.max(np.abs(q[:, 3] - q[:, 2]))}
+    reported = {"roof": res.peak_roof_displacement, "drift": res.peak_interstorey_drift,
+                "stroke": res.peak_strokes[0]}
+    assert res.impacts > 5
+    assert reported["stroke"] == pytest.approx(0.5 * damper.gap, rel=1e-12)  # it reached its walls
+    for name, peak in reported.items():
+        assert sampled[name] <= peak * (1 + 1e-12), name
+        assert sampled[name] >= peak * (1 - 1e-4), name  # a 2e-4 s grid comes that close to every top
+
+
 def test_ground_motion_equals_the_inertial_force(three_storey, el_centro):
     damper = Damper("cid", 0.02 * three_storey.total_mass, gap=0.05, e=0.5)
     ts = np.arange(0.0, 30.0, 0.01)

@@ -282,7 +282,11 @@ def _load_arrays(scene: Scene, mass_full: np.ndarray):
 
 
 def _monitors(scene: Scene, nfull: int):
-    """Rows: roof displacement, roof absolute acceleration, each storey's drift, each damper's stroke."""
+    """Rows: roof displacement, roof absolute acceleration, each storey's drift, each damper's stroke.
+
+    Also each row's cap: a bound its peak cannot pass (beyond the contact tolerance).  A stroke between
+    walls reaches its cap, half the gap, at the first impact; the kernel stops searching it from then on.
+    """
     nf = scene.building.storeys
     rows = []
     kinds = []
@@ -290,6 +294,7 @@ def _monitors(scene: Scene, nfull: int):
     roof[nf - 1] = 1.0
     rows += [roof, roof]
     kinds += [L.MON_DISP, L.MON_ACCEL]
+    caps = [math.inf] * (2 + nf)
     for i in range(nf):
         r = np.zeros(nfull)
         r[i] = 1.0
@@ -304,8 +309,9 @@ def _monitors(scene: Scene, nfull: int):
         r[scene.floor_index(d.floor)] -= 1.0
         rows.append(r)
         kinds.append(L.MON_DISP)
+        caps.append(0.5 * d.gap if d.kind in ("cid", "pid") else math.inf)
         first += int(d.units)
-    return np.array(rows), np.array(kinds, dtype=np.int64)
+    return np.array(rows), np.array(kinds, dtype=np.int64), np.array(caps)
 
 
 def _initial_state(scene: Scene, floor: np.ndarray, gap: np.ndarray, kind: np.ndarray, nfull: int):
@@ -349,8 +355,8 @@ def _scene_arrays(scene: Scene):
     units = (kind, floor, mass, uload, gap, e)
     springs = (k, c) if np.any(kind != L.KIND_CID) else None
     fric = a_f if np.any(a_f > 0.0) else None
-    rows, kinds = _monitors(scene, nf + len(mass))
-    monitors = (rows, kinds, np.where(kinds == L.MON_ACCEL, mon_rec, 0.0))
+    rows, kinds, caps = _monitors(scene, nf + len(mass))
+    monitors = (rows, kinds, np.where(kinds == L.MON_ACCEL, mon_rec, 0.0), caps)
     n_spring = int(np.sum(kind != L.KIND_CID)) if springs is not None else 0
     p = np.zeros(L.NPAR)
     p[L.P_T0] = 0.0

@@ -14,6 +14,7 @@ The package is split by concern:
 - :mod:`.segment`  closed-form flow: configurations (eigen-data), segments, evaluation, exact integrals
 - :mod:`.events`   the certified contact search and the certified peak search
 - :mod:`.contact`  simultaneous impacts (an LCP on each floor), sticking, release
+- :mod:`.modal`    per-configuration tables: energy terms and monitors in a few multiply-adds per mode
 - :mod:`.run`      the loop, calling the named steps of the other modules
 - :mod:`.sampler`  dense output: the state at requested times
 

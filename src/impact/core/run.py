@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from .contact import floor_decision, floor_mass, floor_row, solve_impulses, stays, stuck_row
-from .events import first_exit, peak_abs
+from .events import PEAK_RTOL, first_exit, peak_abs
 from .layout import (D_CAP, D_E0, D_E1, D_EMAX, D_FRICTION, D_GRAZE, D_IMPACTS, D_IMPACTS_WIN, D_IMPLOSS, D_NREC,
                      D_PEAK_GAVE_UP, D_PEN, D_SEGMENTS, D_SIMULTANEOUS, D_STEPS, D_STICKS, D_STUCKTIME, D_TEND,
                      D_VISC, D_WORK,
@@ -26,6 +26,8 @@ from .layout import (D_CAP, D_E0, D_E1, D_EMAX, D_FRICTION, D_GRAZE, D_IMPACTS, 
                      P_MAXEV, P_OMEGA, P_PERIOD, P_PHI, P_REC_DT, P_REC_T0, P_T0, P_TEND, P_TWIN, P_VSTICK, R_IMPULSE,
                      R_SIDE, R_STUCK, R_T, R_UNIT, R_V0, R_V1, R_W0, R_W1)
 from .jitcache import purge_stale_cache
+from .modal import (amplitude_moduli, curvature_bound, end_values, halve, integrate_modal, modal_slot, modal_tables,
+                    mode_weights, monitor_row, square_integral)
 from .sampler import sample_segment
 from .segment import (bound, bound_tab, build_segment, config_key, config_slot, deriv_at0, derivative_row, energy,
                       int_prod, integral_tables, kappa_powers, same_unit, state_from_exp)
@@ -118,10 +120,11 @@ def _clear_of_walls(kpow, ek, c, p, lo, hi, big_t, delta):
 
 @njit(cache=True, inline='always')
 def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape, escape_v, tau_max,
-                  r0, r1, ev_t, ev_side, ev_kind, cs, ps, cq, pq, out, kpow, ek, ek_tau, diag):
+                  r0, r1, ev_t, ev_side, ev_kind, cs, ps, cq, pq, out, kpow, ek, ek_tau, wt, diag):
     """Next event of every unit; returns the earliest time (inf if none up to tau_max).
 
     ek = exp(kap ek_tau): when ek_tau is tau_max, a unit far from its walls is cleared without a search.
+    The searched rows are weighted half rows (modal.halve): half the exponentials per evaluation.
     """
     ukind, ufloor, um, uload, ud = units[0], units[1], units[2], units[3], units[4]
     best = tau_max
@@ -142,6 +145,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
         out[3] = 0.0
         if mode[j] == MODE_FREE:
             _gap_row(C, P, nf, j, f, cs, ps)
+            halve(cs, wt)
             delta = _TOL * (bound_tab(kpow, cs, ps, 0, 0.0) + ud[j])
             if escape[j] == 0 and best == ek_tau and _clear_of_walls(kpow, ek, cs, ps, -half, half, best, delta):
                 out[0] = np.inf
@@ -175,6 +179,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
         elif mode[j] == MODE_STUCK:
             stuck_row(kap, C, P, f, side[j], uload[j] * r0, uload[j] * r1,
                       _unit_level(j, units, springs, fric), cq, pq)
+            halve(cq, wt)
             delta = _TOL * bound_tab(kpow, cq, pq, 0, 0.0)
             q0 = deriv_at0(kap, cq, pq, 0)
             esc = 1 if -q0 < delta else 0
@@ -189,6 +194,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
             if fric is not None:
                 a_f = fric[j]
                 floor_row(kap, C, P, f, uload[j] * r0, uload[j] * r1, cq, pq)
+                halve(cq, wt)
                 delta = _TOL * (bound_tab(kpow, cq, pq, 0, 0.0) + a_f)
                 q0 = deriv_at0(kap, cq, pq, 0)
                 esc = 0
@@ -274,6 +280,33 @@ def integrate_segment(kap, C, P, tau, nf, building, units, springs, mode, load_v
 
 
 @njit(cache=True)
+def step_tables(s, key, tau, dt, kap, ek, pair, single, dtab):
+    """ek = exp(kap tau) and the integral tables over tau.
+
+    A record's whole sample step (tau == dt) recurs in every configuration
+    after each event: its tables are kept per cache slot and copied.
+    """
+    dkey, dek, dpair, dsingle = dtab
+    nt = kap.shape[0]
+    if tau != dt:
+        for k in range(nt):
+            ek[k] = np.exp(kap[k] * tau)
+        integral_tables(kap, ek, tau, pair, single)
+        return
+    if dkey[s] != key:
+        for k in range(nt):
+            dek[s, k] = np.exp(kap[k] * tau)
+        integral_tables(kap, dek[s], tau, dpair[s], dsingle[s])
+        dkey[s] = key
+    for k in range(nt):
+        ek[k] = dek[s, k]
+        for m in range(NPOLY):
+            single[k, m] = dsingle[s, k, m]
+        for l in range(nt):
+            pair[k, l] = dpair[s, k, l]
+
+
+@njit(cache=True)
 def _shift_row(kap, c, p, a, cs, ps):
     """The row h(a + tau) as a row in tau."""
     for k in range(kap.shape[0]):
@@ -285,49 +318,51 @@ def _shift_row(kap, c, p, a, cs, ps):
 
 
 @njit(cache=True, inline='always')
-def monitor_segment(kap, kpow, ek, C, P, tau, t, t_win, mon_rows, mon_kind, mon_rec, r0, r1, pair, single,
-                    cm, pm, cs, ps, stack, mon_peak, mon_peak_t, mon_x2, diag):
-    """Certified peaks of every monitor over the segment, and its square integrated over the window."""
-    nt = kap.shape[0]
+def monitor_modal(s, n, wc, aw, kap, kpow, ek, C, P, tau, t, t_win, monitors, r0, r1, harmonic, mtab, pair, single,
+                  cm, pm, cs, ps, stack, wt, mon_peak, mon_peak_t, mon_x2, diag):
+    """Certified peaks of every monitor over the segment, and the roof's square integrated over the window.
+
+    Rows and curvature bounds come from the modal tables: a segment whose ends
+    and bound cannot beat the running peak is settled without the search, as
+    peak_abs's own first test would settle it.  A monitor whose peak has
+    reached its cap (a stroke at its wall) is not searched again.
+    """
+    mon_rows, mon_kind, mon_rec, mon_cap = monitors
     for m in range(mon_rows.shape[0]):
-        for k in range(nt):
-            cm[k] = 0.0
-        for k in range(NPOLY):
-            pm[k] = 0.0
-        for i in range(C.shape[0]):
-            w = mon_rows[m, i]
-            if w != 0.0:
-                for k in range(nt):
-                    cm[k] += w * C[i, k]
-                for k in range(NPOLY):
-                    pm[k] += w * P[i, k]
-        if mon_kind[m] == MON_ACCEL:
-            for k in range(nt):
-                cm[k] = cm[k] * kap[k] * kap[k]
-            pm[0] = 2.0 * pm[2] + mon_rec[m] * r0
-            pm[1] = 6.0 * pm[3] + mon_rec[m] * r1
-            pm[2] = 0.0
-            pm[3] = 0.0
-        peak, at = peak_abs(kap, kpow, ek, cm, pm, tau, mon_peak[m], stack)
-        if at == -2.0:
-            diag[D_PEAK_GAVE_UP] += 1.0
-        elif at >= 0.0:
-            mon_peak[m] = peak
-            mon_peak_t[m] = t + at
+        if m != 0 and mon_peak[m] >= mon_cap[m]:
+            continue
+        monitor_row(s, m, n, wc, C, mon_rows, mon_kind, mon_rec, kap, P, r0, r1, harmonic, mtab, cm, pm)
         if m == 0 and t + tau > t_win:
-            # the RMS over the window is asked of the first monitor (the roof) only
-            start = max(t_win - t, 0.0)
-            if start > 0.0:
-                # the one segment that the window's start cuts: tables of its own
-                _shift_row(kap, cm, pm, start, cs, ps)
-                rest = tau - start
-                ek_w = np.exp(kap * rest)
-                pair_w = np.empty_like(pair)
-                single_w = np.empty_like(single)
-                integral_tables(kap, ek_w, rest, pair_w, single_w)
-                mon_x2[m] += int_prod(rest, pair_w, single_w, cs, ps, cs, ps)
-            else:
-                mon_x2[m] += int_prod(tau, pair, single, cm, pm, cm, pm)
+            window_square(kap, cm, pm, tau, t, t_win, pair, single, cs, ps, wt, mon_x2)
+        halve(cm, wt)
+        h0, h1 = end_values(ek, cm, pm, tau)
+        ends = max(abs(h0), abs(h1))
+        peak = mon_peak[m]
+        if ends > peak or ends + curvature_bound(s, m, n, aw, cm, pm, kpow, tau, harmonic, mtab) * tau * tau / 8.0 \
+                > peak * (1.0 + PEAK_RTOL):
+            peak, at = peak_abs(kap, kpow, ek, cm, pm, tau, peak, stack)
+            if at == -2.0:
+                diag[D_PEAK_GAVE_UP] += 1.0
+            elif at >= 0.0:
+                mon_peak[m] = peak
+                mon_peak_t[m] = t + at
+
+
+@njit(cache=True, inline='always')
+def window_square(kap, cm, pm, tau, t, t_win, pair, single, cs, ps, wt, mon_x2):
+    """The first monitor's (the roof's) square integrated over the part of the segment inside the window."""
+    start = max(t_win - t, 0.0)
+    if start > 0.0:
+        # the one segment that the window's start cuts: tables of its own
+        _shift_row(kap, cm, pm, start, cs, ps)
+        rest = tau - start
+        ek_w = np.exp(kap * rest)
+        pair_w = np.empty_like(pair)
+        single_w = np.empty_like(single)
+        integral_tables(kap, ek_w, rest, pair_w, single_w)
+        mon_x2[0] += int_prod(rest, pair_w, single_w, cs, ps, cs, ps)
+    else:
+        mon_x2[0] += square_integral(cm, pm, wt, pair, single, tau)
 
 
 @njit(cache=True)
@@ -585,71 +620,31 @@ def resolve_events(t, tau_ev, nf, building, units, fric, mode, side, sigma, offs
 
 
 @njit(cache=True)
-def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitors, q0, v0, mode0, side0,
-              cache, recs, diag, q_out, v_out, mon_peak, mon_peak_t, mon_x2, ts, samples):
-    """One run from p[P_T0] to p[P_TEND]; returns the number of impact records written.
+def _workspace(nt, nfull, nu, nmax, slots, nmon):
+    """Every array a run works in, allocated once: (segment, scratch, events, tables)."""
+    seg = (np.zeros(nt, dtype=np.complex128), np.zeros((nfull, nt), dtype=np.complex128), np.zeros((nfull, NPOLY)),
+           np.zeros(nt, dtype=np.complex128), np.zeros((nt, nt), dtype=np.complex128),
+           np.zeros((nt, NPOLY), dtype=np.complex128), np.zeros((5, nt)))
+    rows = (np.zeros(nt, dtype=np.complex128), np.zeros(NPOLY), np.zeros(nt, dtype=np.complex128), np.zeros(NPOLY),
+            np.zeros(nt, dtype=np.complex128), np.zeros(NPOLY), np.zeros((nfull, nt), dtype=np.complex128),
+            np.zeros((nfull, NPOLY)), np.zeros((2, nt), dtype=np.complex128), np.zeros((2, NPOLY)))
+    vecs = (np.zeros((256, 4)), np.zeros(4), np.zeros(nfull), np.zeros(nfull), np.zeros(nfull), np.zeros(nmax),
+            np.zeros(2 * nmax), np.zeros(nu), np.ones(nt))
+    events = (np.zeros(nu), np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.bool_),
+              np.zeros(nu))
+    dtab = (np.full(slots, -1, dtype=np.int64), np.zeros((slots, nt), dtype=np.complex128),
+            np.zeros((slots, nt, nt), dtype=np.complex128), np.zeros((slots, nt, NPOLY), dtype=np.complex128))
+    tables = (modal_tables(slots, nmax, nmon), dtab, (np.zeros(7 * nmax), np.zeros(4 * nmax, dtype=np.complex128)),
+              np.zeros(1, dtype=np.int64))
+    return seg, rows, vecs, events, tables
 
-    building = (floor masses, storey stiffness matrix, damping matrix);
-    units = (kind, floor, mass, load per unit mass, gap, restitution);
-    monitors = (rows over the degrees of freedom, kind, record coefficient);
-    mode0/side0: every unit's initial contact state; the walls decide at once
-    whether they hold a unit placed against them.
-    """
-    mb = building[0]
-    nf = mb.shape[0]
-    nu = units[2].shape[0]
-    nfull = nf + nu
-    nt = cache[2].shape[1] + (2 if harm is not None else 0)
-    mon_rows, mon_kind, mon_rec = monitors
-    for i in range(NDIAG):
-        diag[i] = 0.0
-    kap = np.zeros(nt, dtype=np.complex128)
-    C = np.zeros((nfull, nt), dtype=np.complex128)
-    P = np.zeros((nfull, NPOLY))
-    cs = np.zeros(nt, dtype=np.complex128)
-    ps = np.zeros(NPOLY)
-    cq = np.zeros(nt, dtype=np.complex128)
-    pq = np.zeros(NPOLY)
-    cm = np.zeros(nt, dtype=np.complex128)
-    pm = np.zeros(NPOLY)
-    ek = np.zeros(nt, dtype=np.complex128)
-    pair = np.zeros((nt, nt), dtype=np.complex128)
-    single = np.zeros((nt, NPOLY), dtype=np.complex128)
-    tab_key = -1
-    tab_tau = -1.0
-    kpow = np.zeros((5, nt))
-    kpow_key = -1
-    slot_key = -1
-    s = 0
-    cv = np.zeros((nfull, nt), dtype=np.complex128)
-    pv = np.zeros((nfull, NPOLY))
-    cu = np.zeros((2, nt), dtype=np.complex128)
-    pu = np.zeros((2, NPOLY))
-    stack = np.zeros((256, 4))
-    out = np.zeros(4)
-    qs = np.zeros(nfull)
-    vs = np.zeros(nfull)
-    v_before = np.zeros(nfull)
-    cursor = np.zeros(1, dtype=np.int64)
-    nmax = cache[5].shape[1]
-    work = (np.zeros(5 * nmax), np.zeros(4 * nmax, dtype=np.complex128))
-    ev_t = np.zeros(nu)
-    ev_side = np.zeros(nu, dtype=np.int64)
-    ev_kind = np.zeros(nu, dtype=np.int64)
-    hit = np.zeros(nu, dtype=np.bool_)
-    impulse = np.zeros(nu)
-    check = np.zeros(nu, dtype=np.int64)
-    escape = np.zeros(nu, dtype=np.int64)
-    escape_v = np.zeros(nu, dtype=np.int64)
-    sigma = np.zeros(nu, dtype=np.int64)
-    offset = np.zeros(nu)
-    s_before = np.zeros(nu)
-    mode = mode0.copy()
-    side = side0.copy()
-    q = q0.copy()
-    v = v0.copy()
+
+@njit(cache=True)
+def _initial_units(nf, units, fric, q, v, ustate):
+    """Contact state of every unit at the start: walls to check, friction's floor contact and slide sign."""
+    mode, side, sigma, offset, escape, escape_v, check = ustate
     ufloor, ud = units[1], units[4]
-    for j in range(nu):
+    for j in range(mode.shape[0]):
         s_j = q[nf + j] - q[ufloor[j]]
         offset[j] = s_j
         if mode[j] != MODE_FREE:
@@ -662,15 +657,108 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
                     check[j] = 2
                 else:
                     sigma[j] = 1 if rel > 0.0 else -1
-    t = p[P_T0]
-    t_end = p[P_TEND]
-    t_win = p[P_TWIN]
-    omega = p[P_OMEGA]
-    period = p[P_PERIOD]
-    max_ev = p[P_MAXEV]
-    vstick = p[P_VSTICK]
+
+
+@njit(cache=True, inline='always')
+def segment_load(p, record, harm, t, t_end):
+    """(r0, r1, theta0, t_next, tau_max): the load on the segment from t and where it may end at the latest."""
+    r0 = 0.0
+    r1 = 0.0
+    theta0 = 0.0
+    t_next = t_end
+    if record is not None:
+        r0, r1, t_next = record_value(record, p, t)
+        t_next = min(t_next, t_end)
+    if harm is not None:
+        theta0 = p[P_OMEGA] * t + p[P_PHI]
+    tau_max = t_next - t
+    if record is not None and t_next < t_end and abs(tau_max - p[P_REC_DT]) <= 1e-9 * p[P_REC_DT]:
+        # a whole sample step: its length is the record's dt, not the difference of two rounded times,
+        # so every such step shares one set of integral tables
+        tau_max = p[P_REC_DT]
+    return r0, r1, theta0, t_next, tau_max
+
+
+@njit(cache=True, inline='always')
+def integrate_energy(s, n, work, cu1, tau, nf, building, units, springs, mode, load_vec, harm, record, theta0,
+                     r0, r1, kap, C, P, pair, single, mtab, cache, cv, pv, cu, pu, diag):
+    """The energy terms over the segment: from the modal tables under a record, from the rows under a harmonic."""
+    if harm is None:
+        integrate_modal(s, n, work, cu1, tau, units, mode, load_vec, record, r0, r1, P, pair, single, mtab, cache,
+                        pu, diag)
+    else:
+        integrate_segment(kap, C, P, tau, nf, building, units, springs, mode, load_vec, harm, record,
+                          theta0, r0, r1, pair, single, cv, pv, cu, pu, diag)
+
+
+@njit(cache=True, inline='always')
+def move_to_end(nf, building, units, springs, fric, mode, sigma, kap, ek, C, P, tau, q, v, s_before, diag):
+    """The state at the segment's end, the friction work on the way, and the largest stored energy."""
+    ufloor = units[1]
+    if fric is not None:
+        for j in range(mode.shape[0]):
+            s_before[j] = q[nf + j] - q[ufloor[j]]
+    state_from_exp(kap, ek, C, P, tau, q, v)
+    if fric is not None:
+        for j in range(mode.shape[0]):
+            if mode[j] == MODE_FREE and fric[j] > 0.0:
+                # s' keeps its sign on a sliding segment: the work is exact
+                slid = q[nf + j] - q[ufloor[j]] - s_before[j]
+                diag[D_FRICTION] += units[2][j] * fric[j] * sigma[j] * slid
+    e_now = energy(building, units, springs, nf, q, v)
+    if e_now > diag[D_EMAX]:
+        diag[D_EMAX] = e_now
+
+
+@njit(cache=True, inline='always')
+def event_cap_reached(t, p, clock):
+    """Count the event in its period (clock = period index, events so far); True past the cap."""
+    pi_now = math.floor(t / p[P_PERIOD])
+    if pi_now != clock[0]:
+        clock[0] = pi_now
+        clock[1] = 0.0
+    clock[1] += 1.0
+    return clock[1] > p[P_MAXEV]
+
+
+@njit(cache=True)
+def handle_events(t, tau, p, nf, building, units, springs, fric, load_vec, harm, record, cache, ustate, q, v,
+                  seg, rows, vecs, events, tables, recs, irec, diag):
+    """Apply the events found at t, settle the contacts they leave and record the impacts; returns irec."""
+    mode, side, sigma, offset, escape, escape_v, check = ustate
+    kap, C, P = seg[0], seg[1], seg[2]
+    cs, ps, cq, pq = rows[0], rows[1], rows[2], rows[3]
+    v_before = vecs[4]
+    ev_t, ev_side, ev_kind, hit, impulse = events
+    work, cursor = tables[2], tables[3]
+    for i in range(q.shape[0]):
+        v_before[i] = v[i]
+    n_hit = resolve_events(t, tau, nf, building, units, fric, mode, side, sigma, offset, escape, escape_v,
+                           check, q, v, ev_t, ev_side, ev_kind, p[P_VSTICK], hit, impulse, diag)
+    if n_hit > 0:
+        diag[D_IMPACTS] += n_hit
+        if t >= p[P_TWIN]:
+            diag[D_IMPACTS_WIN] += n_hit
+        if n_hit > 1:
+            diag[D_SIMULTANEOUS] += 1.0
+    settle(t, p, nf, building, units, springs, fric, load_vec, harm, record, mode, side, sigma, offset,
+           escape, escape_v, check, q, v, cache, cursor, kap, C, P, cs, ps, cq, pq, work, diag)
+    if n_hit > 0:
+        irec = _record_impacts(t, nf, units, mode, side, hit, ev_side, v_before, v, impulse, recs, irec)
+    return irec
+
+
+@njit(cache=True)
+def _start(t, p, nf, building, units, springs, fric, load_vec, harm, record, cache, ustate, q, v, seg, rows, tables,
+           mon_peak, mon_peak_t, mon_x2, diag):
+    """The state a run starts from: contacts decided by the walls, diagnostics and monitors zeroed."""
+    mode, side, sigma, offset, escape, escape_v, check = ustate
+    for i in range(NDIAG):
+        diag[i] = 0.0
+    _initial_units(nf, units, fric, q, v, ustate)
     settle(t, p, nf, building, units, springs, fric, load_vec, harm, record, mode, side, sigma, offset, escape,
-           escape_v, check, q, v, cache, cursor, kap, C, P, cs, ps, cq, pq, work, diag)
+           escape_v, check, q, v, cache, tables[3], seg[0], seg[1], seg[2], rows[0], rows[1], rows[2], rows[3],
+           tables[2], diag)
     diag[D_STICKS] = 0.0  # a unit placed on a wall is not a sticking episode
     diag[D_E0] = energy(building, units, springs, nf, q, v)
     diag[D_EMAX] = diag[D_E0]
@@ -678,113 +766,111 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
         mon_peak[m] = 0.0
         mon_peak_t[m] = t
         mon_x2[m] = 0.0
-    its = 0
+
+
+@njit(cache=True)
+def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitors, q0, v0, mode0, side0,
+              cache, recs, diag, q_out, v_out, mon_peak, mon_peak_t, mon_x2, ts, samples):
+    """One run from p[P_T0] to p[P_TEND]; returns the number of impact records written.
+
+    building = (floor masses, storey stiffness matrix, damping matrix);
+    units = (kind, floor, mass, load per unit mass, gap, restitution);
+    monitors = (rows over the degrees of freedom, kind, record coefficient, cap of the peak);
+    mode0/side0: every unit's initial contact state; the walls decide at once
+    whether they hold a unit placed against them.
+    """
+    nf = building[0].shape[0]
+    nu = units[2].shape[0]
+    nt = cache[2].shape[1] + (2 if harm is not None else 0)
+    seg, rows, vecs, events, tables = _workspace(nt, nf + nu, nu, cache[5].shape[1], cache[0].shape[0],
+                                                 monitors[0].shape[0])
+    kap, C, P, ek, pair, single, kpow = seg
+    cs, ps, cq, pq, cm, pm, cv, pv, cu, pu = rows
+    stack, out, qs, vs, _, cu1, aw, s_before, wt = vecs
+    ev_t, ev_side, ev_kind = events[0], events[1], events[2]
+    mtab, dtab, work, cursor = tables
+    ustate = (mode0.copy(), side0.copy(), np.zeros(nu, dtype=np.int64), np.zeros(nu), np.zeros(nu, dtype=np.int64),
+              np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64))
+    mode, side, sigma, offset, escape, escape_v, check = ustate
+    q = q0.copy()
+    v = v0.copy()
+    t = p[P_T0]
+    t_end = p[P_TEND]
+    _start(t, p, nf, building, units, springs, fric, load_vec, harm, record, cache, ustate, q, v, seg, rows, tables,
+           mon_peak, mon_peak_t, mon_x2, diag)
+    its = 0  # the next sample time
     while its < ts.shape[0] and ts[its] < t:
         its += 1
     irec = 0
-    count_period = 0.0
-    period_index = math.floor(t / period)
+    clock = np.array([math.floor(t / p[P_PERIOD]), 0.0])
+    # what the slot, |kap|^n and the integral tables were last found for: scalars, not an array, so that
+    # they stay in registers (an inlined helper returning them cost 15 % of a run)
+    slot_key = -1
+    kpow_key = -1
+    tab_key = -1
+    tab_tau = -1.0
+    s = 0
+    omega = p[P_OMEGA]
     while t < t_end:
-        r0 = 0.0
-        r1 = 0.0
-        theta0 = 0.0
-        t_next = t_end
-        if record is not None:
-            r0, r1, t_next = record_value(record, p, t)
-            t_next = min(t_next, t_end)
-        if harm is not None:
-            theta0 = omega * t + p[P_PHI]
+        r0, r1, theta0, t_next, tau_max = segment_load(p, record, harm, t, t_end)
         key = config_key(mode)
         if key != slot_key:
             s = config_slot(building, units, springs, load_vec, omega if harm is not None else 0.0, mode, cache,
                             cursor)
+            modal_slot(s, key, cache, nf, units, mode, monitors[0], monitors[1], mtab)
             slot_key = key
         build_segment(s, cache, units, springs, fric, mode, offset, sigma, nf, q, v, r0, r1, harm is not None, theta0,
                       omega, kap, C, P, work)
         if key != kpow_key:
             kappa_powers(kap, kpow)
+            mode_weights(kap, wt)
             kpow_key = key
-        diag[D_SEGMENTS] += 1.0
-        tau_max = t_next - t
-        if record is not None and t_next < t_end and abs(tau_max - p[P_REC_DT]) <= 1e-9 * p[P_REC_DT]:
-            # a whole sample step: its length is the record's dt, not the difference of two rounded times,
-            # so every such step shares one set of integral tables
-            tau_max = p[P_REC_DT]
         if record is not None and (key != tab_key or tau_max != tab_tau):
             # sampled loads repeat the same step in the same configuration: the tables carry over
-            for k in range(nt):
-                ek[k] = np.exp(kap[k] * tau_max)
-            integral_tables(kap, ek, tau_max, pair, single)
+            step_tables(s, key, tau_max, p[P_REC_DT], kap, ek, pair, single, dtab)
             tab_key = key
             tab_tau = tau_max
+        diag[D_SEGMENTS] += 1.0
         best = search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape, escape_v, tau_max,
                              r0, r1, ev_t, ev_side, ev_kind, cs, ps, cq, pq, out, kpow, ek,
-                             tab_tau if key == tab_key else -1.0, diag)
+                             tab_tau if key == tab_key else -1.0, wt, diag)
         event = best <= tau_max and best < np.inf
         tau = best if event else tau_max
+        n = cache[1][s]
+        wc = work[1]  # the segment's modal amplitudes are wc[2n:4n] (build_segment)
+        amplitude_moduli(n, wc, aw)
         if key != tab_key or tau != tab_tau:
-            for k in range(nt):
-                ek[k] = np.exp(kap[k] * tau)
-            integral_tables(kap, ek, tau, pair, single)
+            step_tables(s, key, tau, p[P_REC_DT] if record is not None else -1.0, kap, ek, pair, single, dtab)
             tab_key = key
             tab_tau = tau
-        integrate_segment(kap, C, P, tau, nf, building, units, springs, mode, load_vec, harm, record,
-                          theta0, r0, r1, pair, single, cv, pv, cu, pu, diag)
-        monitor_segment(kap, kpow, ek, C, P, tau, t, t_win, mon_rows, mon_kind, mon_rec, r0, r1, pair, single,
-                        cm, pm, cs, ps, stack, mon_peak, mon_peak_t, mon_x2, diag)
-        its = sample_segment(kap, C, P, t, tau, ts, its, samples, qs, vs)
-        if fric is not None:
-            for j in range(nu):
-                s_before[j] = q[nf + j] - q[ufloor[j]]
-        state_from_exp(kap, ek, C, P, tau, q, v)
-        if fric is not None:
-            for j in range(nu):
-                if mode[j] == MODE_FREE and fric[j] > 0.0:
-                    # s' keeps its sign on a sliding segment: the work is exact
-                    slid = q[nf + j] - q[ufloor[j]] - s_before[j]
-                    diag[D_FRICTION] += units[2][j] * fric[j] * sigma[j] * slid
+        integrate_energy(s, n, work, cu1, tau, nf, building, units, springs, mode, load_vec, harm, record, theta0,
+                         r0, r1, kap, C, P, pair, single, mtab, cache, cv, pv, cu, pu, diag)
+        monitor_modal(s, n, wc, aw, kap, kpow, ek, C, P, tau, t, p[P_TWIN], monitors, r0, r1, harm is not None, mtab,
+                      pair, single, cm, pm, cs, ps, stack, wt, mon_peak, mon_peak_t, mon_x2, diag)
+        if its < ts.shape[0]:
+            its = sample_segment(kap, C, P, t, tau, ts, its, samples, qs, vs)
+        move_to_end(nf, building, units, springs, fric, mode, sigma, kap, ek, C, P, tau, q, v, s_before, diag)
         t = t_next if not event else t + tau
         for j in range(nu):
             escape[j] = 0
             escape_v[j] = 0
-        e_now = energy(building, units, springs, nf, q, v)
-        if e_now > diag[D_EMAX]:
-            diag[D_EMAX] = e_now
         if not event:
             continue
-        pi_now = math.floor(t / period)
-        if pi_now != period_index:
-            period_index = pi_now
-            count_period = 0.0
-        count_period += 1.0
-        if count_period > max_ev:
+        if event_cap_reached(t, p, clock):
             diag[D_CAP] = 1.0
             break
-        for i in range(nfull):
-            v_before[i] = v[i]
-        n_hit = resolve_events(t, tau, nf, building, units, fric, mode, side, sigma, offset, escape, escape_v,
-                               check, q, v, ev_t, ev_side, ev_kind, vstick, hit, impulse, diag)
-        if n_hit > 0:
-            diag[D_IMPACTS] += n_hit
-            if t >= t_win:
-                diag[D_IMPACTS_WIN] += n_hit
-            if n_hit > 1:
-                diag[D_SIMULTANEOUS] += 1.0
-        settle(t, p, nf, building, units, springs, fric, load_vec, harm, record, mode, side, sigma, offset,
-               escape, escape_v, check, q, v, cache, cursor, kap, C, P, cs, ps, cq, pq, work, diag)
+        irec = handle_events(t, tau, p, nf, building, units, springs, fric, load_vec, harm, record, cache, ustate, q,
+                             v, seg, rows, vecs, events, tables, recs, irec, diag)
         slot_key = -1  # settle may have filled (and so replaced) cache slots
         tab_key = -1
         kpow_key = -1
-        if n_hit > 0:
-            irec = _record_impacts(t, nf, units, mode, side, hit, ev_side, v_before, v, impulse, recs, irec)
     diag[D_E1] = energy(building, units, springs, nf, q, v)
     diag[D_NREC] = irec
     diag[D_TEND] = t
-    for i in range(nfull):
+    for i in range(nf + nu):
         q_out[i] = q[i]
         v_out[i] = v[i]
     return irec
-
 
 
 purge_stale_cache(run_scene, "impact-core")

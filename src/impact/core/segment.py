@@ -22,6 +22,7 @@ from numba import njit
 from .layout import KIND_CID, MODE_FREE, NPOLY
 
 _SERIES = 0.5  # |z T| below which the integrals use their power series
+_RECIP = np.concatenate((np.zeros(1), 1.0 / np.arange(1.0, 46.0)))  # _RECIP[n] = 1 / n
 
 
 # ----------------------------------------------------------------------------
@@ -323,8 +324,9 @@ def build_segment(s, cache, units, springs, fric, mode, offset, sigma, nf, q, v,
 
     r0 + r1 tau: the record's value on the segment (per unit of load_vec);
     harmonic: the load is sin(theta0 + omega tau) per unit of load_vec.
-    work = (floats, complexes): scratch of 5 and 4 times the largest reduced size, so that a
-    segment allocates nothing.
+    work = (floats, complexes): scratch of 7 and 4 times the largest reduced size, so that a
+    segment allocates nothing; the modal amplitudes are left in complexes[2n:4n] and the particular
+    solution's velocity in floats[2n:3n] (the modal shortcuts read them).
     """
     keys, nr, lam, vec, vinv, kinv, cred, fidx, ellr, zc = cache
     ufloor, um, uload = units[1], units[2], units[3]
@@ -337,60 +339,57 @@ def build_segment(s, cache, units, springs, fric, mode, offset, sigma, nf, q, v,
     if harmonic:
         kap[nt - 2] = 1j * omega
         kap[nt - 1] = -1j * omega
+    # scratch by offset, not by slices: a slice is a new array object on every segment
+    # (wf: g0 | g1 | u1 | qp | tmp | dz, the state minus the particular solution; wc[2n:4n]: amplitudes)
     wf, wc = work
-    g0 = wf[0:n]
-    g1 = wf[n:2 * n]
-    u1 = wf[2 * n:3 * n]
-    qp = wf[3 * n:4 * n]
-    tmp = wf[4 * n:5 * n]
-    dz = wc[0:2 * n]
+    G0, G1, U1, QP, TMP, DZ = 0, n, 2 * n, 3 * n, 4 * n, 5 * n
     for i in range(n):
-        g0[i] = ellr[s, i] * r0
-        g1[i] = ellr[s, i] * r1
+        wf[G0 + i] = ellr[s, i] * r0
+        wf[G1 + i] = ellr[s, i] * r1
     if fric is not None:
         for j in range(um.shape[0]):
             if mode[j] == MODE_FREE and fric[j] > 0.0:
                 # a sliding mass drags its floor along with m a_f sigma
-                g0[ufloor[j]] += um[j] * fric[j] * sigma[j]
+                wf[G0 + ufloor[j]] += um[j] * fric[j] * sigma[j]
     for i in range(n):
-        u1[i] = 0.0
-        qp[i] = 0.0
-        tmp[i] = g0[i]
-    for i in range(n):
-        for j in range(n):
-            u1[i] += kinv[s, i, j] * g1[j]
+        wf[U1 + i] = 0.0
+        wf[QP + i] = 0.0
+        wf[TMP + i] = wf[G0 + i]
     for i in range(n):
         for j in range(n):
-            tmp[i] -= cred[s, i, j] * u1[j]
+            wf[U1 + i] += kinv[s, i, j] * wf[G1 + j]
     for i in range(n):
         for j in range(n):
-            qp[i] += kinv[s, i, j] * tmp[j]
+            wf[TMP + i] -= cred[s, i, j] * wf[U1 + j]
+    for i in range(n):
+        for j in range(n):
+            wf[QP + i] += kinv[s, i, j] * wf[TMP + j]
     ph = np.exp(1j * theta0)
     for i in range(n):
         full = fidx[s, i]
-        dz[i] = q[full] - qp[i]
-        dz[n + i] = v[full] - u1[i]
+        wf[DZ + i] = q[full] - wf[QP + i]
+        wf[DZ + n + i] = v[full] - wf[U1 + i]
         if harmonic:
-            dz[i] -= (zc[s, i] * ph).imag
-            dz[n + i] -= (zc[s, n + i] * ph).imag
-    w = wc[2 * n:4 * n]  # the modal amplitudes, once for every row
+            wf[DZ + i] -= (zc[s, i] * ph).imag
+            wf[DZ + n + i] -= (zc[s, n + i] * ph).imag
+    W = 2 * n  # the modal amplitudes, once for every row
     for k in range(2 * n):
         wk = 0.0 + 0.0j
         for l in range(2 * n):
-            wk += vinv[s, k, l] * dz[l]
-        w[k] = wk
+            wk += vinv[s, k, l] * wf[DZ + l]
+        wc[W + k] = wk
     for i in range(n):
         full = fidx[s, i]
         for k in range(nt):
             C[full, k] = 0.0
         for k in range(2 * n):
-            C[full, k] = vec[s, i, k] * w[k]
+            C[full, k] = vec[s, i, k] * wc[W + k]
         if harmonic:
             ch = zc[s, i] * ph / 2j
             C[full, nt - 2] = ch
             C[full, nt - 1] = ch.conjugate()
-        P[full, 0] = qp[i]
-        P[full, 1] = u1[i]
+        P[full, 0] = wf[QP + i]
+        P[full, 1] = wf[U1 + i]
         P[full, 2] = 0.0
         P[full, 3] = 0.0
     _copy_identical_rows(units, springs, mode, nf, q, v, C, P)
@@ -470,20 +469,21 @@ def _phi0(z, big_t, ez):
 def _phi_m(z, big_t, ez, out):
     """out[m] = integral over [0, T] of tau^m exp(z tau), m = 0..3."""
     zt = z * big_t
-    if abs(zt) < _SERIES:
-        # sum_n (zT)^n / n! T^(m+1) / (n + m + 1): every m in one pass
+    if zt.real * zt.real + zt.imag * zt.imag < _SERIES * _SERIES:
+        # sum_n (zT)^n / n! T^(m+1) / (n + m + 1): every m in one pass (reciprocals from a table: a
+        # segment after every event builds these tables, and divisions dominated it)
         term = 1.0 + 0.0j
         a0 = 0.0 + 0.0j
         a1 = 0.0 + 0.0j
         a2 = 0.0 + 0.0j
         a3 = 0.0 + 0.0j
         for n in range(40):
-            a0 += term / (n + 1.0)
-            a1 += term / (n + 2.0)
-            a2 += term / (n + 3.0)
-            a3 += term / (n + 4.0)
-            term = term * zt / (n + 1.0)
-            if abs(term) < 1e-18:
+            a0 += term * _RECIP[n + 1]
+            a1 += term * _RECIP[n + 2]
+            a2 += term * _RECIP[n + 3]
+            a3 += term * _RECIP[n + 4]
+            term = term * zt * _RECIP[n + 1]
+            if term.real * term.real + term.imag * term.imag < 1e-36:
                 break
         out[0] = a0 * big_t
         out[1] = a1 * big_t ** 2
