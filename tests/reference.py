@@ -74,3 +74,49 @@ def copy_workflow(root, dest):
         else:
             shutil.copy2(src, dest / name)
     return dest
+
+
+# words in the names of measured run times, which differ between any two runs
+_TIMING = ("time", "second", "speed", "wall")
+
+
+def smoke_digest(results) -> dict:
+    """A compact fingerprint of the smoke study's numbers: per dataset variable and table column, the count,
+    the sum and the sum of squares of its finite values (run times left out), and its NaN count.
+
+    tests/data/smoke_reference.json holds the fingerprint of the smoke study as the workflow was restructured
+    (registry, one writer): every number equal to the study's before that change, which was checked when the
+    file was made, except the numerics stability table, whose `ok` now also asks for penetration <= 1e-6 of
+    the gap and an amplitude within 1e-3 of the core's (two columns added).  The smoke run must keep matching
+    it.  Regenerate it only for a change meant to move numbers:
+    python -c "import sys, json; sys.path.insert(0, 'tests'); from reference import smoke_digest;
+    print(json.dumps(smoke_digest('results'), indent=1, sort_keys=True))" > tests/data/smoke_reference.json
+    """
+    from pathlib import Path
+
+    import pandas as pd
+    import xarray as xr
+
+    def stats(values):
+        x = np.asarray(values, dtype=float).ravel()
+        finite = x[np.isfinite(x)]
+        return [int(finite.size), float(finite.sum()), float((finite * finite).sum()), int(np.isnan(x).sum())]
+
+    out = {}
+    root = Path(results)
+    for path in sorted(root.rglob("*.nc")):
+        with xr.open_dataset(path) as ds:
+            for name, var in {**ds.coords, **ds.data_vars}.items():
+                if var.dtype.kind in "fiub" and not any(w in str(name) for w in _TIMING):
+                    out[f"{path.relative_to(root)}:{name}"] = stats(var.values)
+    for path in sorted(root.rglob("*.csv")):
+        if "benchmarks" in path.parts:
+            continue
+        try:
+            frame = pd.read_csv(path)
+        except Exception:  # noqa: BLE001 (a CSV with a commented header is not a table of numbers)
+            continue
+        for name in frame.columns:
+            if frame[name].dtype.kind in "fiub" and not any(w in str(name) for w in _TIMING):
+                out[f"{path.relative_to(root)}:{name}"] = stats(frame[name].values)
+    return out

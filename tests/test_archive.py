@@ -28,10 +28,16 @@ def _dataset(values=None) -> xr.Dataset:
     return xr.Dataset(
         {"amplitude": (("start", "freq_ratio"), amp, {"units": "model_unit", "long_name": "amplitude"}),
          "ipc_class": (("start", "freq_ratio"), np.array([[1, 2, -1], [0, 2, 3]], dtype=np.int8),
-                       {"flag_values": np.array([-1, 0, 1, 2, 3], dtype=np.int8)})},
-        coords={"start": ("start", np.array(["centre", "left"], dtype=object)),
-                "freq_ratio": ("freq_ratio", [0.9, 1.0, 1.1], {"units": "1"})},
+                       {"flag_values": np.array([-1, 0, 1, 2, 3], dtype=np.int8), "long_name": "IPC class"})},
+        coords={"start": ("start", np.array(["centre", "left"], dtype=object), {"long_name": "start"}),
+                "freq_ratio": ("freq_ratio", [0.9, 1.0, 1.1], {"units": "1", "long_name": "frequency ratio"})},
         attrs={"title": "test sweep", "param_mu": 0.01, "config": json.dumps(CONFIG)})
+
+
+def _plain_copy(src: Path, dst: Path, **kw) -> None:
+    """The same content as src (with the writer's attributes), stored uncompressed."""
+    with xr.open_dataset(src) as ds:
+        ds.load().drop_encoding().to_netcdf(dst, engine="netcdf4", **kw)
 
 
 @pytest.fixture
@@ -39,8 +45,7 @@ def tree(tmp_path) -> Path:
     root = tmp_path / "work"
     res = root / "results"
     write_netcdf(_dataset(), res / "sweeps" / "cid_a.nc")  # compressed, as the pipeline writes them
-    (res / "sweeps").mkdir(parents=True, exist_ok=True)
-    _dataset().to_netcdf(res / "sweeps" / "plain.nc", engine="netcdf4")  # uncompressed: a value's bytes are findable
+    _plain_copy(res / "sweeps" / "cid_a.nc", res / "sweeps" / "plain.nc")  # a value's bytes are findable
     (res / "figures").mkdir(parents=True)
     (res / "figures" / "fig08.png").write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(range(256)) * 4)
     (res / "tables").mkdir(parents=True)
@@ -221,7 +226,7 @@ def test_missing_and_extra_entries_are_found(tree, tmp_path):
 def test_content_hash_sees_values_attributes_and_coordinates_not_storage(tmp_path):
     base = archive.dataset_content_sha256(_dataset())
     write_netcdf(_dataset(), tmp_path / "a.nc")
-    _dataset().to_netcdf(tmp_path / "b.nc", engine="netcdf4", format="NETCDF4_CLASSIC")
+    _plain_copy(tmp_path / "a.nc", tmp_path / "b.nc", format="NETCDF4_CLASSIC")
     assert archive.netcdf_content_sha256(tmp_path / "a.nc") == archive.netcdf_content_sha256(tmp_path / "b.nc")
 
     def changed(edit):

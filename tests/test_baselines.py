@@ -12,7 +12,12 @@ import numpy as np
 import pytest
 
 from impact.baselines import (
-    BaselineResult, impact_law, simulate_ivp, simulate_moreau_jean, simulate_penalty, simulate_rk4,
+    BaselineResult,
+    impact_law,
+    simulate_ivp,
+    simulate_moreau_jean,
+    simulate_penalty,
+    simulate_rk4,
 )
 from impact.baselines.penalty import dashpot
 from impact.params import System

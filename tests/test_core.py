@@ -6,12 +6,11 @@ import math
 
 import numpy as np
 import pytest
+from reference import one_body_amplitude, oscillator, rms_amplitude
 from scipy.optimize import brentq
 
 from impact.params import ParameterError, Protocol, System
 from impact.simulate import frequency_grid, simulate, sweep
-
-from reference import one_body_amplitude, oscillator, rms_amplitude
 
 PAPER = dict(mu=0.01, beta=0.0048, e=0.25)
 

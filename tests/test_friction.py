@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from reference import one_body_amplitude, oscillator_derivatives
 from scipy.optimize import brentq
 
 from impact.params import Protocol, System
 from impact.simulate import friction_data, simulate
-
-from reference import one_body_amplitude, oscillator_derivatives
 
 PAPER = dict(mu=0.01, beta=0.0048, e=0.25)
 

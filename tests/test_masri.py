@@ -12,9 +12,16 @@ import numpy as np
 import pytest
 
 from impact import masri
+from impact.masri import (
+    BRANCHES,
+    ImpactMapError,
+    classify,
+    exact_impact_map,
+    masri_2eipc,
+    orbit_initial_state,
+    periodicity_residual,
+)
 from impact.params import ParameterError
-from impact.masri import (BRANCHES, ImpactMapError, classify, exact_impact_map, masri_2eipc,
-                          orbit_initial_state, periodicity_residual)
 
 BETA = 0.0048
 XST = 0.096  # force_ratio = F0/K; gaps below are quoted as d/x_st like masri.md section 9

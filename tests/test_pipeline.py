@@ -78,6 +78,89 @@ def test_sweep_dataset_is_self_describing_and_round_trips(smoke, tmp_path):
         assert pid.attrs["param_rp"] == 1.0
 
 
+def test_smoke_numbers_match_the_frozen_study(smoke):
+    """Registry, one writer and the moved Snakefile changed no number (run times aside): see smoke_digest."""
+    from reference import smoke_digest
+
+    frozen = json.loads((ROOT / "tests" / "data" / "smoke_reference.json").read_text())
+    now = smoke_digest(smoke / "results")
+    assert sorted(now) == sorted(frozen)
+    for key, (count, total, squares, nans) in frozen.items():
+        got = now[key]
+        assert (got[0], got[3]) == (count, nans), key
+        assert got[1] == pytest.approx(total, rel=1e-9, abs=1e-12), key
+        assert got[2] == pytest.approx(squares, rel=1e-9, abs=1e-12), key
+
+
+def test_every_dataset_of_the_study_is_self_describing(smoke):
+    """Every .nc the smoke study writes carries CF conventions, its provenance and a described variable each."""
+    from impact.io import undescribed_variables
+
+    paths = sorted((smoke / "results").rglob("*.nc"))
+    assert len(paths) >= 10, paths  # sweeps, closed-form checks, coexistence, numerics
+    for path in paths:
+        with xr.open_dataset(path) as ds:
+            assert ds.attrs.get("Conventions", "").startswith("CF-1."), path
+            for key in ("source", "code_version", "git_commit", "date_created"):
+                assert key in ds.attrs, (path, key)
+            assert undescribed_variables(ds) == [], path
+
+
+def test_the_cf_checker_finds_no_high_priority_fault_in_any_dataset(smoke, tmp_path):
+    """The IOOS compliance-checker, CF 1.8, on every dataset of the smoke study."""
+    from compliance_checker.runner import CheckSuite, ComplianceChecker
+
+    CheckSuite.load_all_available_checkers()
+    faults = {}
+    for i, path in enumerate(sorted((smoke / "results").rglob("*.nc"))):
+        out = tmp_path / f"{i}.json"
+        ComplianceChecker.run_checker(str(path), ["cf:1.8"], 0, "normal", output_filename=str(out),
+                                      output_format="json")
+        checks = json.loads(out.read_text())["cf:1.8"]["high_priorities"]
+        failed = [(c["name"], c["msgs"]) for c in checks if c["value"][0] < c["value"][1]]
+        if failed:
+            faults[str(path.relative_to(smoke))] = failed
+    assert faults == {}
+
+
+def test_a_registered_figure_reaches_the_report_and_the_archive(smoke, tmp_path):
+    """One rule and its register() line, and nothing else, put a new figure in the report and the archive."""
+    import shutil
+    import tarfile
+
+    work = tmp_path / "copy"
+    shutil.copytree(smoke, work, symlinks=True)
+    with open(work / "workflow" / "rules" / "figures.smk", "a") as smk:
+        smk.write('''
+
+rule dummy_figure:
+    output:
+        png="results/figures/dummy_figure.png",
+    log:
+        "results/logs/dummy_figure.log",
+    benchmark:
+        "results/benchmarks/dummy_figure.tsv"
+    run:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots()
+        ax.plot([0, 1], [0, 1])
+        fig.savefig(output.png)
+
+
+register(rules.dummy_figure, report=("png",))
+''')
+    _snakemake(work, "all", "archive", "--cores", "2", "--configfile", "config/smoke.yaml")
+    page = (work / "results" / "report" / "index.html").read_text()
+    assert '<section id="dummy_figure"' in page
+    (archive,) = (work / "results" / "archive").glob("*.tar.gz")
+    with tarfile.open(archive) as tar:
+        assert any(name.endswith("results/figures/dummy_figure.png") for name in tar.getnames())
+
+
 def test_one_figure_dry_run_lists_only_its_jobs(smoke):
     # the target goes first: --configfile takes every word after it
     out = _snakemake(smoke, "results/figures/fig09.png", "-n", "--forceall",

@@ -357,8 +357,8 @@ def test_snakemake_script_entry_uses_only_declared_inputs(results):
     from types import SimpleNamespace
 
     smk = SimpleNamespace(
-        input=_Named(figures=[str(results / "figures" / "fig08.png"), str(results / "figures" / "fig08.pdf")],
-                     paper_vs_reproduced=str(results / "tables" / "paper_vs_reproduced.csv"),
+        input=_Named(shown=[str(results / "tables" / "paper_vs_reproduced.csv"), str(results / "figures" / "fig08.png"),
+                            str(results / "figures" / "fig08.pdf")],
                      benchmarks=[str(results / "benchmarks" / "figure" / "fig08.tsv")],
                      library=["src/impact/report.py"]),
         output=[str(results / "report" / "index.html")],

@@ -18,8 +18,16 @@ from scipy import signal
 from impact.building import Building
 from impact.params import ParameterError, Protocol, System
 from impact.records import REAL_RECORDS, RecordError, load_record, parse_at2, read_at2
-from impact.scene import (Damper, ForceRecord, GroundMotion, Harmonic, Scene, amplitude, paper_scene_from_system,
-                          simulate_scene)
+from impact.scene import (
+    Damper,
+    ForceRecord,
+    GroundMotion,
+    Harmonic,
+    Scene,
+    amplitude,
+    paper_scene_from_system,
+    simulate_scene,
+)
 from impact.simulate import simulate
 
 PAPER = dict(mu=0.01, beta=0.0048, e=0.25)

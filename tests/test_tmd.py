@@ -15,8 +15,7 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
 from impact.params import ParameterError
-from impact.tmd import (den_hartog, nishihara_asami, tmd_amplitude, tmd_optimum, tmd_peak,
-                        tmd_response, tmd_sweep_x_max)
+from impact.tmd import den_hartog, nishihara_asami, tmd_amplitude, tmd_optimum, tmd_peak, tmd_response, tmd_sweep_x_max
 
 XST = 0.096      # force_ratio F0/K of the paper
 BETA = 0.0048    # structural damping ratio of the paper

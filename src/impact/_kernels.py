@@ -55,8 +55,8 @@ NPAR = 13
 D_IMPACTS, D_IMPACTS_WIN, D_STICKS, D_GRAZE, D_PEN = 0, 1, 2, 3, 4
 D_WORK, D_VISC, D_IMPLOSS, D_E0, D_E1, D_X2WIN = 5, 6, 7, 8, 9, 10
 D_CAP, D_NREC, D_STEPS, D_STUCKTIME, D_TEND = 11, 12, 13, 14, 15
-D_FRICTION = 16
-NDIAG = 17
+D_FRICTION, D_EMAX = 16, 17  # D_EMAX: the largest stored energy at a segment's end
+NDIAG = 18
 
 # record columns: t, side, x, v-, w-, v+, w+, stuck_after
 NREC = 8
@@ -396,6 +396,7 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
         elif mode == MODE_FREE and sigma == 0:
             sigma = 1 if z[3] > z[1] else -1
     diag[D_E0] = _energy(z, p)
+    diag[D_EMAX] = diag[D_E0]
     count_period = 0.0
     period_index = math.floor(t / period)
     nrec = rec.shape[0]
@@ -486,6 +487,9 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
             diag[D_STUCKTIME] += tau
         s_start = z[2] - z[0]
         _state(kap, cx, cy, poly[0], poly[1], tau, z)
+        e_now = _energy(z, p)
+        if e_now > diag[D_EMAX]:
+            diag[D_EMAX] = e_now
         if fric is not None:
             if mode == MODE_FREE:
                 # s' keeps its sign on a sliding segment: the work is exact

@@ -48,7 +48,7 @@ from pathlib import Path, PurePosixPath
 
 import numpy as np
 
-from .pipeline import publish
+from .io import atomic_path
 from .report import canonical_json, config_hash
 
 MANIFEST = "MANIFEST.json"
@@ -328,22 +328,15 @@ def build_archive(out_tar_gz, root, include: list, config: Mapping | None, citat
     manifest_bytes = (json.dumps(manifest, indent=1, sort_keys=True) + "\n").encode("utf-8")
     digest = f"{hashlib.sha256(manifest_bytes).hexdigest()}  {MANIFEST}\n".encode("ascii")
 
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
-    try:
-        with os.fdopen(fd, "wb") as raw, \
-                gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=epoch, compresslevel=6) as gz, \
-                tarfile.open(fileobj=gz, mode="w", format=tarfile.PAX_FORMAT) as tar:
-            _add(tar, f"{prefix}/{MANIFEST}", manifest_bytes, None, epoch)
-            _add(tar, f"{prefix}/{MANIFEST_DIGEST}", digest, None, epoch)
-            for name, data in generated.items():
-                _add(tar, f"{prefix}/{name}", data, None, epoch)
-            for name, path in files.items():
-                _add(tar, f"{prefix}/{name}", None, path, epoch)
-        publish(tmp, out)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_path(out) as tmp, open(tmp, "wb") as raw, \
+            gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=epoch, compresslevel=6) as gz, \
+            tarfile.open(fileobj=gz, mode="w", format=tarfile.PAX_FORMAT) as tar:
+        _add(tar, f"{prefix}/{MANIFEST}", manifest_bytes, None, epoch)
+        _add(tar, f"{prefix}/{MANIFEST_DIGEST}", digest, None, epoch)
+        for name, data in generated.items():
+            _add(tar, f"{prefix}/{name}", data, None, epoch)
+        for name, path in files.items():
+            _add(tar, f"{prefix}/{name}", None, path, epoch)
     return out
 
 

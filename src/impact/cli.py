@@ -170,7 +170,7 @@ def cmd_sweep(args) -> dict:
     system = _system(args)
     protocol = _protocol(args)
     grid = frequency_grid(args.r_min, args.r_max, args.r_step)
-    result = sweep(system, grid, protocol)
+    result = sweep(system, grid, protocol, progress=True)
     out = {
         "damper": system.kind,
         "parameters": system.as_dict(),

@@ -16,6 +16,7 @@ import pandas as pd
 import xarray as xr
 
 from . import _kernels as K
+from .dataset import LENGTH_NOTE, LENGTH_UNIT
 from .params import Protocol, System
 from .simulate import sweep
 from .study import curve_id, curve_system, freq_grid, gap_grid
@@ -83,9 +84,9 @@ def run_ensemble(cfg: dict, spec: dict, members: pd.DataFrame, protocol: Protoco
 def ensemble_dataset(spec, members, gaps, r, amp, aipc, a_max) -> xr.Dataset:
     dims = ("member", "gap_ratio", "freq_ratio")
     ds = xr.Dataset(
-        {"amplitude": (dims, amp, {"units": "model_unit", "long_name": "sqrt(2)*RMS amplitude of x"}),
+        {"amplitude": (dims, amp, {"units": LENGTH_UNIT, "long_name": "sqrt(2)*RMS amplitude of x"}),
          "aipc": (dims, aipc, {"units": "1", "long_name": "average impacts per cycle"})},
-        coords={"member": ("member", np.arange(len(members)), {"long_name": "ensemble member"}),
+        coords={"member": ("member", np.arange(len(members)), {"units": "1", "long_name": "ensemble member"}),
                 "gap_ratio": ("gap_ratio", gaps, {"units": "1", "long_name": "gap ratio g = d / A_max"}),
                 "freq_ratio": ("freq_ratio", r, {"units": "1", "long_name": "frequency ratio r"}),
                 "start_place": ("member", members["place"].to_numpy(), {
@@ -104,6 +105,6 @@ def ensemble_dataset(spec, members, gaps, r, amp, aipc, a_max) -> xr.Dataset:
         "units": "1", "long_name": "distinct steady states met (by amplitude and AIPC)"})
     ds["attractors_max"] = ("gap_ratio", counts.max(axis=1).astype(np.int16), {
         "units": "1", "long_name": "most distinct steady states met at one frequency"})
-    ds.attrs.update(curve=str(curve_id(spec)), a_max=a_max,
+    ds.attrs.update(curve=str(curve_id(spec)), a_max=a_max, length_unit=LENGTH_NOTE,
                     attractor_tolerances=f"amplitude rel {AMPLITUDE_RTOL}, AIPC abs {AIPC_ATOL}")
     return ds

@@ -9,20 +9,21 @@ fields when nu = 0.
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
+from .io import write_dataset
 from .params import Protocol, System
-from .pipeline import publish as _publish
 from .provenance import attributes
 
 IPC_FLAG_VALUES = np.array([-1, 0, 1, 2, 3], dtype=np.int8)
 IPC_FLAG_MEANINGS = "undefined less_than_1_ipc one_ipc two_ipc more_than_2_ipc"
-LENGTH_UNIT = "model_unit"  # the paper's "units"; F0/K = force_ratio of them
+# The paper's lengths are in an arbitrary model unit (F0/K = force_ratio of them): a pure number to UDUNITS.
+# The datasets say so in their global attribute length_unit.
+LENGTH_UNIT = "1"
+LENGTH_NOTE = "lengths are in the paper's model unit, in which the static deflection F0/K equals force_ratio"
 
 _PER_RUN = {
     # name: (source, dtype, units, long_name)
@@ -33,7 +34,8 @@ _PER_RUN = {
     "sticking_episodes": ("sticking_episodes", "i4", "1", "episodes of the damper mass resting against a wall"),
     "grazing_events": ("grazing_events", "i4", "1", "wall touches resolved at the contact tolerance"),
     "max_penetration": ("max_penetration", "f8", LENGTH_UNIT, "largest overshoot beyond a wall at a located impact"),
-    "energy_residual": ("energy_residual", "f8", "1", "energy-balance residual relative to the work of the force"),
+    "energy_residual": ("energy_residual", "f8", "1",
+                        "energy-balance residual over the largest of the force's work, the losses and the stored energy"),
     "event_cap_reached": ("event_cap_reached", "i1", "1", "1 if the run stopped at the cap on events per period"),
 }
 
@@ -104,6 +106,7 @@ def _attributes(base: System, protocol: Protocol, curve, config, sweep_mode) -> 
                       friction_accel=base.friction_accel)
     attrs = {
         "Conventions": "CF-1.10",
+        "length_unit": LENGTH_NOTE,
         "title": f"Frequency sweeps of the {base.kind.upper()} over gap ratios (Chua et al. parametric study)",
         "institution": "impact-dampers study",
         "references": "Chua, Pacheco, Fujino, Ito: classical and pendulum impact dampers for civil structures",
@@ -128,17 +131,5 @@ def _attributes(base: System, protocol: Protocol, curve, config, sweep_mode) -> 
 
 
 def write_netcdf(ds: xr.Dataset, path) -> Path:
-    """Write compressed netCDF atomically: a temporary file in the target folder, then rename."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    encoding = {name: {"zlib": True, "complevel": 4} for name in ds.data_vars
-                if ds[name].dtype.kind in "fiu"}
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        ds.to_netcdf(tmp, encoding=encoding, engine="netcdf4")
-        _publish(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    """Write a dataset of the study (impact.io.write_dataset: atomic, CF attributes, provenance)."""
+    return write_dataset(ds, path)

@@ -19,10 +19,10 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from . import _kernels as K
 from .masri import forced_flow, masri_2eipc, orbit_initial_state
 from .params import Protocol, System, a_max
 from .simulate import simulate
-from . import _kernels as K
 
 ROOTS = ("upper", "lower")
 JUST_AFTER_RIGHT_IMPACT = K.encode_contact(K.MODE_FREE, 1, 0)
@@ -345,7 +345,8 @@ def branches_dataset(cfg: dict, beta: float, force_ratio: float, protocol: Proto
          "stable": (("root", "r"), stable, {"units": "1", "long_name": "1 if the closed-form root is stable"}),
          "simulated": (("start", "r"), sim, {"units": "1", "long_name": "sqrt(2)*RMS amplitude from rest over F0/K"}),
          "aipc": (("start", "r"), aipc, {"units": "1", "long_name": "average impacts per cycle, from rest"})},
-        coords={"root": ("root", list(ROOTS)), "start": ("start", list(starts)),
+        coords={"root": ("root", list(ROOTS), {"long_name": "root of the closed form (upper/lower signs of eq. 6)"}),
+                "start": ("start", list(starts), {"long_name": "initial position of the damper mass"}),
                 "r": ("r", r, {"units": "1", "long_name": "frequency ratio"})})
     ds.attrs.update(mu=cfg["mu"], e=cfg["e"], gap_ratio=cfg["gap_ratio"], beta=beta, force_ratio=force_ratio)
     return ds

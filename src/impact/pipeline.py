@@ -5,11 +5,11 @@ from __future__ import annotations
 import contextlib
 import json
 import logging
-import os
 import sys
-import tempfile
 import time
 from pathlib import Path
+
+from .io import publish, write_csv_atomic, write_json_atomic, write_text_atomic  # noqa: F401 (the scripts' names)
 
 
 @contextlib.contextmanager
@@ -32,40 +32,6 @@ def logged(path):
                 raise
             finally:
                 root.removeHandler(handler)
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-def publish(tmp, path) -> None:
-    """Give a finished temporary file ordinary permissions and move it into place."""
-    os.chmod(tmp, 0o666 & ~_umask())
-    os.replace(tmp, path)
-
-
-
-def write_text_atomic(path, text: str) -> None:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-        publish(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def write_json_atomic(path, obj) -> None:
-    write_text_atomic(path, json.dumps(obj, indent=1, sort_keys=True) + "\n")
-
-
-def write_csv_atomic(path, frame) -> None:
-    write_text_atomic(path, frame.to_csv(index=False))
 
 
 def log_versions() -> None:

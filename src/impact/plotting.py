@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import matplotlib
@@ -12,7 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .pipeline import publish as _publish  # noqa: E402
+from .io import atomic_path  # noqa: E402
 from .study import curve_id  # noqa: E402
 
 IPC_MARKERS = {0: ("o", "none", "<1 IPC"), 1: ("^", "none", "1 IPC"), 2: ("o", "full", "2 IPC"), 3: ("s", "none", ">2 IPC")}
@@ -83,15 +81,8 @@ def plot_figure(fig_cfg: dict, datasets: dict, tmd: dict | None, outputs) -> Non
 
 def save_atomic(fig, path) -> None:
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
+    with atomic_path(path, suffix=path.suffix) as tmp:
         fig.savefig(tmp, dpi=130, metadata={"CreationDate": None} if path.suffix == ".pdf" else None)
-        _publish(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 CHART_COLORS = ["#f0f0f0", "#c8c8c8", "#f4a582", "#4393c3"]
@@ -242,15 +233,15 @@ def plot_work_precision(ds, footer: str, outputs, error: str = "amplitude_error"
 
 
 def plot_stability_map(table, outputs) -> None:
-    """Heat map case x method: ok, finished with a non-finite result, or failed (annotated)."""
+    """Heat map case x method: ok (finished within tolerance), finished outside it, or failed (annotated)."""
     cases = list(dict.fromkeys(table["case"]))
     methods = list(dict.fromkeys(table["method"]))
     grid = np.zeros((len(cases), len(methods)))
     fig, ax = plt.subplots(figsize=(1.2 * len(methods) + 3, 0.45 * len(cases) + 2))
     for _, row in table.iterrows():
         i, j = cases.index(row["case"]), methods.index(row["method"])
-        failed = not str(row["status"]).startswith("ok")
-        grid[i, j] = 2 if failed else (0 if row["finite"] else 1)
+        failed = not str(row["status"]).startswith("ok") or not row["finite"]
+        grid[i, j] = 2 if failed else (0 if row["ok"] else 1)
         pen = row.get("max_penetration", np.nan)
         label = "failed" if failed else (f"pen {pen:.0e}" if np.isfinite(pen) and pen > 0 else "ok")
         ax.text(j, i, label, ha="center", va="center", fontsize=6)
@@ -259,7 +250,8 @@ def plot_stability_map(table, outputs) -> None:
     ax.imshow(grid, cmap=ListedColormap(["#a6dba0", "#fdb863", "#e66101"]), vmin=0, vmax=2, aspect="auto")
     ax.set_xticks(range(len(methods)), methods, rotation=30, ha="right", fontsize=8)
     ax.set_yticks(range(len(cases)), cases, fontsize=8)
-    ax.set_title("Extreme cases: green ok, orange non-finite, red failed (largest penetration beyond a wall)",
+    ax.set_title("Extreme cases: green ok (penetration <= 1e-6 of the gap, amplitude within 1e-3 of the core's),\n"
+                 "orange finished outside that, red failed or non-finite (largest penetration beyond a wall)",
                  fontsize=9)
     fig.tight_layout()
     for out in outputs:

@@ -174,7 +174,10 @@ TABLE_CAPTIONS = {
     "masri_summary": "The closed-form check summarised by start of the damper mass and by the orbit's stability margin.",
     "coexistence": "Steady states reached from rest, by continuation in frequency and from an ensemble of starts.",
     "cross_validation": "The exact event-driven core against independent integrators on the same cases.",
-    "numerics_stability": "Which integrators stay stable, and where, on the study's cases.",
+    "numerics_stability": (
+        "Which integrators stay stable, and where, on the study's cases. ok means finished and within "
+        "tolerance: penetration at most 1e-6 of the gap and an amplitude within 1e-3 of the exact core's."
+    ),
     "numerics_error_runtime": (
         "Error against run time of the exact event-driven core and of the baseline integrators on the "
         "same cases; lower left is better."
@@ -795,14 +798,18 @@ def build_report(out_html, sections, provenance: Mapping | None) -> Path:
 # --------------------------------------------------------------------------- Snakemake glue
 
 
+# a standard table that its rule keeps under a name of its own
+STANDARD_STEMS = {"validation_table": "cross_validation"}
+
+
 def snakemake_main(smk) -> Path:
     """Body of the ``report`` rule's script.
 
-    Named inputs: ``figures`` (images), one per standard table or figure id (``paper_vs_reproduced``,
-    ``tmd_optimum``, ``masri_check``, ``masri_summary``, ``coexistence``, ``cross_validation``,
-    ``numerics_stability``, ``numerics_error_runtime``), ``tables`` (any further CSV/JSON tables),
-    ``benchmarks`` (benchmark TSVs; default: every one under results/benchmarks); ``library`` is
-    ignored.  ``resources.executor`` (or ``params.executor``) names the executor.
+    Named inputs: ``shown``, what the workflow's registry says the report shows (images; CSV and
+    JSON tables: one whose file stem, or its STANDARD_STEMS alias, is a standard section id takes
+    that section's place, the others come last in their order); ``benchmarks`` (benchmark TSVs;
+    default: every one under results/benchmarks); ``library`` is ignored.  ``resources.executor``
+    (or ``params.executor``) names the executor.
     """
     inp = smk.input
     names = set(inp.keys()) if hasattr(inp, "keys") else set()
@@ -811,19 +818,23 @@ def snakemake_main(smk) -> Path:
         if key not in names:
             return []
         value = getattr(inp, key)
-        return [value] if isinstance(value, str) else list(value)
+        return [str(value)] if isinstance(value, str) else [str(v) for v in value]
 
-    extra = {}
-    for sid in list(STANDARD_TABLES) + list(STANDARD_FIGURES_EXTRA):
-        files = named(sid)
-        if files:
-            extra[sid] = files[0]
-    figures = named("figures") + [extra[sid] for sid in STANDARD_FIGURES_EXTRA if sid in extra]
-    tables = named("tables")
+    shown = named("shown")
+    figures = [p for p in shown if Path(p).suffix.lower() in _MIME]
+    extra, tables = {}, []
+    for path in shown:
+        if path in figures:
+            continue
+        sid = STANDARD_STEMS.get(Path(path).stem, Path(path).stem)
+        if sid in STANDARD_TABLES:
+            extra[sid] = path
+        else:
+            tables.append(path)
     results = Path(smk.output[0]).parent.parent
     sections = standard_sections(results, figures=figures, extra=extra, config=smk.config, tables=tables)
     # only what the rule declares: standard files not wired as inputs stay out
-    declared = {str(Path(p)) for p in figures + tables} | {str(Path(p)) for p in extra.values()}
+    declared = {str(Path(p)) for p in shown}
     sections = [s for s in sections if s["kind"] == "text" or str(Path(s["path"])) in declared]
     bench = named("benchmarks")
     if not bench:

@@ -153,7 +153,9 @@ def _diagnostics(diag: np.ndarray) -> dict:
     work = diag[K.D_WORK]
     losses = diag[K.D_VISC] + diag[K.D_IMPLOSS] + diag[K.D_FRICTION]
     residual = work - losses - (diag[K.D_E1] - diag[K.D_E0])
-    scale = max(abs(work), losses, 1e-300)
+    # a run that stores far more than it exchanges (no damping, a mass started at a far wall) is
+    # judged on the right scale: the largest of the work, the losses and the stored energy
+    scale = max(abs(work), losses, diag[K.D_EMAX], 1e-300)
     return {
         "impacts": int(diag[K.D_IMPACTS]),
         "impacts_in_window": int(diag[K.D_IMPACTS_WIN]),
@@ -263,8 +265,17 @@ class SweepResult:
 SWEEP_MODES = ("from_rest", "continuation_up", "continuation_down")
 
 
+def _progress(values, show: bool):
+    """values, with a progress bar on stderr when asked and stderr is a terminal (tqdm: silent otherwise)."""
+    if not show:
+        return values
+    from tqdm import tqdm
+
+    return tqdm(values, desc="frequencies", unit="run", leave=False, disable=None)
+
+
 def sweep(system: System, r_values, protocol: Protocol = Protocol(), mode: str = "from_rest",
-          state=None, contact=None) -> SweepResult:
+          state=None, contact=None, progress: bool = False) -> SweepResult:
     """Frequency sweep under the protocol.
 
     from_rest: every frequency starts afresh from the protocol's start (or from
@@ -274,20 +285,21 @@ def sweep(system: System, r_values, protocol: Protocol = Protocol(), mode: str =
     sweep would; the force stays continuous (its phase carries over).  Each
     frequency still runs the protocol's periods and window, so the first
     average_from periods settle the new frequency.  Results are in the order
-    of r_values either way.
+    of r_values either way.  progress: a progress bar on stderr when it is a terminal (tqdm).
     """
     if mode not in SWEEP_MODES:
         raise ValueError(f"sweep mode {mode!r} is not one of {', '.join(SWEEP_MODES)}")
     r_values = np.asarray(r_values, dtype=float)
     if mode == "from_rest":
-        runs = [simulate(system, float(r), protocol, state=state, contact=contact) for r in r_values]
+        runs = [simulate(system, float(r), protocol, state=state, contact=contact)
+                for r in _progress(r_values, progress)]
         return SweepResult(r=r_values, runs=runs)
     order = np.argsort(r_values, kind="stable")
     if mode == "continuation_down":
         order = order[::-1]
     runs = [None] * len(r_values)
     current, z, code = system, state, contact
-    for i in order:
+    for i in _progress(order, progress):
         r = float(r_values[i])
         run = simulate(current, r, protocol, state=z, contact=code)
         runs[i] = run

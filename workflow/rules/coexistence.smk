@@ -7,13 +7,6 @@ rule continuation_curve:
         library=LIB_SWEEP,
     output:
         "results/coexistence/{curve}_{mode}.nc",
-    params:
-        study=curve_params,
-    threads: 1
-    resources:
-        runtime=30, mem_mb=1000,
-    conda:
-        ENV
     log:
         "results/logs/continuation_curve/{curve}_{mode}.log",
     benchmark:
@@ -21,6 +14,14 @@ rule continuation_curve:
     wildcard_constraints:
         curve="cid_[A-Za-z0-9_.]+",
         mode="continuation_up|continuation_down",
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=30,
+        mem_mb=1000,
+    params:
+        study=curve_params,
     script:
         "../scripts/continuation_curve.py"
 
@@ -30,29 +31,30 @@ rule ensemble_curve:
         library=LIB_SWEEP + library("coexistence.py"),
     output:
         "results/coexistence/{curve}_ensemble.nc",
-    params:
-        study=curve_params,
-        ensemble=config.get("coexistence", {}).get("ensemble", {}),
-    threads: 1
-    resources:
-        runtime=60, mem_mb=1000,
-    conda:
-        ENV
     log:
         "results/logs/ensemble_curve/{curve}.log",
     benchmark:
         "results/benchmarks/ensemble_curve/{curve}.tsv"
     wildcard_constraints:
         curve="cid_[A-Za-z0-9_.]+",
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=60,
+        mem_mb=1000,
+    params:
+        study=curve_params,
+        ensemble=config.get("coexistence", {}).get("ensemble", {}),
     script:
         "../scripts/ensemble_curve.py"
 
 
 rule coexistence_figure:
     input:
-        from_rest="results/sweeps/{curve}.nc",
-        continuation=lambda wc: [f"results/coexistence/{wc.curve}_{m}.nc" for m in COEXISTENCE_MODES],
-        ensemble="results/coexistence/{curve}_ensemble.nc",
+        from_rest=rules.sweep_curve.output[0],
+        continuation=lambda wc: expand(rules.continuation_curve.output[0], curve=wc.curve, mode=COEXISTENCE_MODES),
+        ensemble=rules.ensemble_curve.output[0],
         library=LIB_PLOT,
     output:
         png=report(
@@ -62,27 +64,28 @@ rule coexistence_figure:
             subcategory=snakemake_subcategory("coexistence_"),
         ),
         pdf="results/figures/coexistence_{curve}.pdf",
-    params:
-        spec=lambda wc: CURVES[wc.curve],
-    threads: 1
-    resources:
-        runtime=5, mem_mb=1000,
-    conda:
-        ENV
     log:
         "results/logs/coexistence_figure/{curve}.log",
     benchmark:
         "results/benchmarks/coexistence_figure/{curve}.tsv"
     wildcard_constraints:
         curve="cid_[A-Za-z0-9_.]+",
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=5,
+        mem_mb=1000,
+    params:
+        spec=lambda wc: CURVES[wc.curve],
     script:
         "../scripts/plot_coexistence.py"
 
 
 rule hysteresis_figure:
     input:
-        from_rest="results/sweeps/{curve}.nc",
-        continuation=lambda wc: [f"results/coexistence/{wc.curve}_{m}.nc" for m in COEXISTENCE_MODES],
+        from_rest=rules.sweep_curve.output[0],
+        continuation=lambda wc: expand(rules.continuation_curve.output[0], curve=wc.curve, mode=COEXISTENCE_MODES),
         library=LIB_PLOT + library("masri.py", "masri_check.py"),
     output:
         png=report(
@@ -92,21 +95,22 @@ rule hysteresis_figure:
             subcategory=snakemake_subcategory("hysteresis_"),
         ),
         pdf="results/figures/hysteresis_{curve}.pdf",
-    params:
-        spec=lambda wc: CURVES[wc.curve],
-        gap_ratio=config.get("coexistence", {}).get("hysteresis", {}).get("gap_ratio", 1.6),
-        structure=config["structure"],
-    threads: 1
-    resources:
-        runtime=5, mem_mb=1000,
-    conda:
-        ENV
     log:
         "results/logs/hysteresis_figure/{curve}.log",
     benchmark:
         "results/benchmarks/hysteresis_figure/{curve}.tsv"
     wildcard_constraints:
         curve="cid_[A-Za-z0-9_.]+",
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=5,
+        mem_mb=1000,
+    params:
+        spec=lambda wc: CURVES[wc.curve],
+        gap_ratio=config.get("coexistence", {}).get("hysteresis", {}).get("gap_ratio", 1.6),
+        structure=config["structure"],
     script:
         "../scripts/plot_hysteresis.py"
 
@@ -114,9 +118,11 @@ rule hysteresis_figure:
 rule coexistence_table:
     input:
         from_rest=[sweep_file(s) for s in COEXISTENCE_CURVES],
-        continuation=[f"results/coexistence/{curve_id(s)}_{m}.nc" for s in COEXISTENCE_CURVES for m in COEXISTENCE_MODES],
-        ensemble=[f"results/coexistence/{curve_id(s)}_ensemble.nc" for s in COEXISTENCE_CURVES],
-        library=library("comparison.py", "study.py", "pipeline.py"),
+        continuation=expand(
+            rules.continuation_curve.output[0], curve=[curve_id(s) for s in COEXISTENCE_CURVES], mode=COEXISTENCE_MODES
+        ),
+        ensemble=expand(rules.ensemble_curve.output[0], curve=[curve_id(s) for s in COEXISTENCE_CURVES]),
+        library=library("comparison.py", "study.py", "pipeline.py", "io.py"),
     output:
         table=report(
             "results/tables/coexistence.csv",
@@ -125,14 +131,24 @@ rule coexistence_table:
             subcategory=snakemake_subcategory("coexistence"),
         ),
         statement="results/tables/coexistence_e_trend.json",
-    threads: 1
-    resources:
-        runtime=5, mem_mb=1000,
-    conda:
-        ENV
     log:
         "results/logs/coexistence_table.log",
     benchmark:
         "results/benchmarks/coexistence_table.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=5,
+        mem_mb=1000,
     script:
         "../scripts/coexistence_table.py"
+
+
+COEXISTENCE_IDS = [curve_id(s) for s in COEXISTENCE_CURVES]
+register(rules.continuation_curve, curve=COEXISTENCE_IDS, mode=COEXISTENCE_MODES)
+register(rules.ensemble_curve, curve=COEXISTENCE_IDS)
+register(rules.coexistence_figure, report=("png",), curve=COEXISTENCE_IDS)
+register(rules.hysteresis_figure, report=("png",), curve=COEXISTENCE_IDS)
+if COEXISTENCE_CURVES:
+    register(rules.coexistence_table, report=("table", "statement"))

@@ -4,7 +4,7 @@
 rule figure:
     input:
         curves=lambda wc: [sweep_file(s) for s in figure_curves(config, wc.fig).values()],
-        tmd=lambda wc: ["results/tables/tmd_optimum.json"] if needs_tmd(wc.fig) else [],
+        tmd=lambda wc: rules.tmd_optimum.output if needs_tmd(wc.fig) else [],
         library=LIB_PLOT,
     output:
         png=report(
@@ -14,18 +14,22 @@ rule figure:
             subcategory=lambda wc: snakemake_subcategory(wc.fig),
         ),
         pdf="results/figures/{fig}.pdf",
-    params:
-        figure=lambda wc: config["figures"][wc.fig],
-    threads: 1
-    resources:
-        runtime=5, mem_mb=1000,
-    conda:
-        ENV
     log:
         "results/logs/figure/{fig}.log",
     benchmark:
         "results/benchmarks/figure/{fig}.tsv"
     wildcard_constraints:
         fig="fig[0-9]{2}",
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=5,
+        mem_mb=1000,
+    params:
+        figure=lambda wc: config["figures"][wc.fig],
     script:
         "../scripts/plot_figure.py"
+
+
+register(rules.figure, report=("png",), fig=FIGURES)

@@ -14,20 +14,21 @@ rule masri_check:
             subcategory=snakemake_subcategory("masri_check"),
         ),
         summary="results/checks/masri_summary.json",
+    log:
+        "results/logs/masri_check.log",
+    benchmark:
+        "results/benchmarks/masri_check.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=30,
+        mem_mb=1000,
     params:
         grid=config["masri"]["grid"],
         structure=config["structure"],
         protocol={k: config["protocol"][k] for k in ("periods", "average_from")},
         starts=config["protocol"]["starts"]["cid"],
-    threads: 1
-    resources:
-        runtime=30, mem_mb=1000,
-    conda:
-        ENV
-    log:
-        "results/logs/masri_check.log",
-    benchmark:
-        "results/benchmarks/masri_check.tsv"
     script:
         "../scripts/masri_check.py"
 
@@ -37,18 +38,19 @@ rule masri_chart:
         library=library("masri.py", "masri_check.py", "params.py"),
     output:
         "results/checks/masri_chart.nc",
-    params:
-        chart=config["masri"]["chart"],
-        structure=config["structure"],
-    threads: 1
-    resources:
-        runtime=30, mem_mb=1000,
-    conda:
-        ENV
     log:
         "results/logs/masri_chart.log",
     benchmark:
         "results/benchmarks/masri_chart.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=30,
+        mem_mb=1000,
+    params:
+        chart=config["masri"]["chart"],
+        structure=config["structure"],
     script:
         "../scripts/masri_chart.py"
 
@@ -58,28 +60,29 @@ rule masri_branches:
         library=LIB_CORE + library("masri.py", "masri_check.py"),
     output:
         "results/checks/masri_branches.nc",
+    log:
+        "results/logs/masri_branches.log",
+    benchmark:
+        "results/benchmarks/masri_branches.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=30,
+        mem_mb=1000,
     params:
         branches=config["masri"]["branches"],
         structure=config["structure"],
         protocol={k: config["protocol"][k] for k in ("periods", "average_from")},
         starts=config["protocol"]["starts"]["cid"],
-    threads: 1
-    resources:
-        runtime=30, mem_mb=1000,
-    conda:
-        ENV
-    log:
-        "results/logs/masri_branches.log",
-    benchmark:
-        "results/benchmarks/masri_branches.tsv"
     script:
         "../scripts/masri_branches.py"
 
 
 rule masri_figures:
     input:
-        chart="results/checks/masri_chart.nc",
-        branches="results/checks/masri_branches.nc",
+        chart=rules.masri_chart.output[0],
+        branches=rules.masri_branches.output[0],
         library=LIB_PLOT,
     output:
         chart_png=report(
@@ -96,14 +99,22 @@ rule masri_figures:
             subcategory=snakemake_subcategory("masri_branches"),
         ),
         branches_pdf="results/figures/masri_branches.pdf",
-    threads: 1
-    resources:
-        runtime=5, mem_mb=1000,
-    conda:
-        ENV
     log:
         "results/logs/masri_figures.log",
     benchmark:
         "results/benchmarks/masri_figures.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=5,
+        mem_mb=1000,
     script:
         "../scripts/plot_masri.py"
+
+
+if MASRI:
+    register(rules.masri_check, report=("table", "summary"))
+    register(rules.masri_chart)
+    register(rules.masri_branches)
+    register(rules.masri_figures, report=("chart_png", "branches_png"))

@@ -4,30 +4,45 @@
 
 rule numerics_work_precision:
     input:
-        library=LIB_CORE + library("numerics.py", "baselines/__init__.py", "baselines/ivp.py",
-                                   "baselines/fixed_step.py", "baselines/moreau.py", "baselines/penalty.py"),
+        library=LIB_CORE
+        + library(
+            "numerics.py",
+            "baselines/__init__.py",
+            "baselines/ivp.py",
+            "baselines/fixed_step.py",
+            "baselines/moreau.py",
+            "baselines/penalty.py",
+        ),
     output:
         dataset="results/numerics/work_precision.nc",
         speed="results/tables/numerics_speed.csv",
-    params:
-        numerics=config.get("numerics", {}),
-    threads: 1
-    resources:
-        runtime=60, mem_mb=2000,
-    conda:
-        ENV
     log:
         "results/logs/numerics_work_precision.log",
     benchmark:
         "results/benchmarks/numerics_work_precision.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=60,
+        mem_mb=2000,
+    params:
+        numerics=config.get("numerics", {}),
     script:
         "../scripts/numerics_work_precision.py"
 
 
 rule numerics_stability:
     input:
-        library=LIB_CORE + library("numerics.py", "baselines/__init__.py", "baselines/ivp.py",
-                                   "baselines/fixed_step.py", "baselines/moreau.py", "baselines/penalty.py"),
+        library=LIB_CORE
+        + library(
+            "numerics.py",
+            "baselines/__init__.py",
+            "baselines/ivp.py",
+            "baselines/fixed_step.py",
+            "baselines/moreau.py",
+            "baselines/penalty.py",
+        ),
     output:
         table=report(
             "results/tables/numerics_stability.csv",
@@ -35,25 +50,26 @@ rule numerics_stability:
             category="Numerics",
             subcategory="Stability on extreme cases",
         ),
-    params:
-        numerics=config.get("numerics", {}),
-    threads: 1
-    resources:
-        runtime=60, mem_mb=2000,
-    conda:
-        ENV
     log:
         "results/logs/numerics_stability.log",
     benchmark:
         "results/benchmarks/numerics_stability.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=60,
+        mem_mb=2000,
+    params:
+        numerics=config.get("numerics", {}),
     script:
         "../scripts/numerics_stability.py"
 
 
 rule numerics_figures:
     input:
-        dataset="results/numerics/work_precision.nc",
-        stability="results/tables/numerics_stability.csv",
+        dataset=rules.numerics_work_precision.output.dataset,
+        stability=rules.numerics_stability.output.table,
         library=LIB_PLOT + library("provenance.py"),
     output:
         work_png=report(
@@ -65,14 +81,21 @@ rule numerics_figures:
         work_pdf="results/figures/numerics_error_runtime.pdf",
         map_png="results/figures/numerics_stability_map.png",
         map_pdf="results/figures/numerics_stability_map.pdf",
-    threads: 1
-    resources:
-        runtime=5, mem_mb=1000,
-    conda:
-        ENV
     log:
         "results/logs/numerics_figures.log",
     benchmark:
         "results/benchmarks/numerics_figures.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=5,
+        mem_mb=1000,
     script:
         "../scripts/plot_numerics.py"
+
+
+if NUMERICS:
+    register(rules.numerics_work_precision, report=("speed",))
+    register(rules.numerics_stability, report=("table",))
+    register(rules.numerics_figures, report=("map_png", "work_png"))

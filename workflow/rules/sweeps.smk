@@ -7,18 +7,22 @@ rule sweep_curve:
         library=LIB_SWEEP,
     output:
         "results/sweeps/{curve}.nc",
-    params:
-        study=curve_params,
-    threads: 1
-    resources:
-        runtime=30, mem_mb=1000,
-    conda:
-        ENV
     log:
         "results/logs/sweep_curve/{curve}.log",
     benchmark:
         "results/benchmarks/sweep_curve/{curve}.tsv"
     wildcard_constraints:
         curve="(cid|pid)_[A-Za-z0-9_.]+",
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=30,
+        mem_mb=1000,
+    params:
+        study=curve_params,
     script:
         "../scripts/sweep_curve.py"
+
+
+register(rules.sweep_curve, curve=list(CURVES))

@@ -11,18 +11,22 @@ rule tmd_optimum:
             category=snakemake_category("tmd_optimum"),
             subcategory=snakemake_subcategory("tmd_optimum"),
         ),
-    params:
-        mu=config["tmd"]["mu"],
-        beta=config["structure"]["beta"],
-        force_ratio=config["structure"]["force_ratio"],
-    threads: 1
-    resources:
-        runtime=5, mem_mb=500,
-    conda:
-        ENV
     log:
         "results/logs/tmd_optimum.log",
     benchmark:
         "results/benchmarks/tmd_optimum.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=5,
+        mem_mb=500,
+    params:
+        mu=config["tmd"]["mu"],
+        beta=config["structure"]["beta"],
+        force_ratio=config["structure"]["force_ratio"],
     script:
         "../scripts/tmd_optimum.py"
+
+
+register(rules.tmd_optimum, report=(0,))

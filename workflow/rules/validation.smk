@@ -23,16 +23,21 @@ rule cross_validation:
         fig3_pdf="results/validation/fig3.pdf",
         fig5="results/validation/fig5.png",
         fig5_pdf="results/validation/fig5.pdf",
-    params:
-        smoke=VALIDATION.get("smoke", False),
-    threads: VALIDATION.get("threads", 2)
-    resources:
-        runtime=30, mem_mb=2000,
-    conda:
-        ENV
     log:
         "results/logs/cross_validation.log",
     benchmark:
         "results/benchmarks/cross_validation.tsv"
+    conda:
+        ENV
+    threads: VALIDATION.get("threads", 2)
+    resources:
+        runtime=30,
+        mem_mb=2000,
+    params:
+        smoke=VALIDATION.get("smoke", False),
     script:
         "../scripts/cross_validation.py"
+
+
+if VALIDATION:
+    register(rules.cross_validation, report=("table", "claims", "fig3", "fig5"))

@@ -32,12 +32,25 @@ import math
 
 import numpy as np
 
-from . import (
-    H_STICK, ZENO_IMPACTS, Affine, ImpactLog, TrapzWindow, check_inputs, default_v_stick, free_affine, impact_law,
-    initial_state, leaves_now, make_result, merged_velocity, rebound_negligible, stuck_affine,
+from ..params import System
+from ._common import (
+    H_STICK,
+    ZENO_IMPACTS,
+    Affine,
+    ImpactLog,
+    TrapzWindow,
+    check_inputs,
+    default_v_stick,
+    free_affine,
+    impact_law,
+    initial_state,
+    leaves_now,
+    make_result,
+    merged_velocity,
+    rebound_negligible,
+    stuck_affine,
     stuck_exit_functionals,
 )
-from ..params import System
 
 MAX_IDLE_STEPS = 1000
 

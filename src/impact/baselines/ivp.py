@@ -50,12 +50,28 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from . import (
-    H_STICK, ZENO_IMPACTS, S_VEL, Affine, Functional, ImpactLog, check_inputs, default_v_stick, free_affine,
-    impact_law, initial_state, leaves_now, make_result, merged_velocity, near_zero,
-    rebound_negligible, stuck_affine, stuck_exit_functionals, wall_gap,
-)
 from ..params import System
+from ._common import (
+    H_STICK,
+    S_VEL,
+    ZENO_IMPACTS,
+    Affine,
+    Functional,
+    ImpactLog,
+    check_inputs,
+    default_v_stick,
+    free_affine,
+    impact_law,
+    initial_state,
+    make_result,
+    merged_velocity,
+    near_zero,
+    rebound_negligible,
+    stuck_affine,
+    stuck_exit_functionals,
+    stuck_phase,
+    wall_gap,
+)
 
 IVP_METHODS = ("RK45", "DOP853", "Radau", "LSODA", "BDF", "RK23")
 _IMPLICIT = ("Radau", "BDF", "LSODA")
@@ -330,21 +346,14 @@ def simulate_ivp(system: System, r: float, t_end: float, t_window: float, start:
             vc = merged_velocity(mu, z[1], z[3])
             z = np.array([z[0], vc, z[0] + s0, vc])
             exits = stuck_exit_functionals(system, sd, s0)
-            released = None
-            for g, rel in exits:
-                if leaves_now(g, t, z, stuck, r, ph, scale):
-                    released = rel
-                    break
+            t, z, released, msg, advanced = stuck_phase(seg, stuck, exits, t, z, r, ph, scale)
+            if msg:
+                status = f"failed: {msg}"
+                break
             if released is None:
-                t0 = t
-                t, z, fired, msg = seg.run(stuck, [(g, +1) for g, _ in exits], t, z)
-                if msg:
-                    status = f"failed: {msg}"
-                    break
-                if fired is None:
-                    break
-                released = exits[fired][1]
-                idle = idle + 1 if t - t0 <= 1e-12 * max(1.0, t) else 0
+                break
+            if advanced is not None:
+                idle = 0 if advanced else idle + 1
             # slide away with s' of sign -released (friction), or fly free (no friction)
             z[2] = z[0] + s0
             mode = ("free", -float(released) if af > 0.0 else 0.0, None)

@@ -44,8 +44,8 @@ from __future__ import annotations
 
 import math
 
-from . import ImpactLog, TrapzWindow, check_inputs, initial_state, make_result
 from ..params import System
+from ._common import ImpactLog, TrapzWindow, check_inputs, initial_state, make_result
 
 
 def _step_matrices(system: System, h: float, theta: float):

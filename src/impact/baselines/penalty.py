@@ -29,12 +29,23 @@ import math
 
 import numpy as np
 
-from . import (
-    ImpactLog, S_VEL, Functional, check_inputs, default_v_stick, free_affine, initial_state,
-    leaves_now, make_result, merged_velocity, stuck_affine, stuck_exit_functionals, wall_gap,
+from ..params import System
+from ._common import (
+    S_VEL,
+    Functional,
+    ImpactLog,
+    check_inputs,
+    default_v_stick,
+    free_affine,
+    initial_state,
+    make_result,
+    merged_velocity,
+    stuck_affine,
+    stuck_exit_functionals,
+    stuck_phase,
+    wall_gap,
 )
 from .ivp import MAX_IDLE_PHASES, Segments
-from ..params import System
 
 
 def dashpot(system: System, stiffness: float) -> tuple[float, float]:
@@ -107,23 +118,13 @@ def simulate_penalty(system: System, r: float, t_end: float, t_window: float, st
             vc = merged_velocity(system.mu, z[1], z[3])
             z = np.array([z[0], vc, z[0] + s0, vc])
             exits = stuck_exit_functionals(system, 0, s0, contact_of(cs))
-            released = None
-            for g, rel in exits:
-                if leaves_now(g, t, z, stuck, r, ph, scale):
-                    released = rel
-                    break
+            t, z, released, msg, advanced = stuck_phase(seg, stuck, exits, t, z, r, ph, scale)
+            if msg:
+                status = f"failed: {msg}"
+                break
             if released is None:
-                t0 = t
-                t, z, fired, msg = seg.run(stuck, [(g, +1) for g, _ in exits], t, z)
-                if msg:
-                    status = f"failed: {msg}"
-                    break
-                if fired is None:
-                    break
-                released = exits[fired][1]
-                idle = idle + 1 if t - t0 <= 1e-12 * max(1.0, t) else 0
-            else:
-                idle += 1
+                break
+            idle = 0 if advanced else idle + 1
             z[2] = z[0] + s0
             cside = cs
             # a mass released at the wall from rest slides inward unless pushed outward

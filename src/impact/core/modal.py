@@ -32,7 +32,7 @@ import numpy as np
 from numba import njit
 
 from .layout import D_STUCKTIME, D_VISC, D_WORK, MODE_FREE, MODE_LOCKED, MON_ACCEL, NPOLY
-from .segment import poly_bound
+from .segment import poly_bound, poly_integral
 
 
 @njit(cache=True)
@@ -206,23 +206,7 @@ def square_integral(c, p, wt, pair, single, big_t):
             poly += p[m] * single[k, m]
         quad += wt[k] * c[k] * inner
         cross += wt[k] * c[k] * poly
-    return quad.real + 2.0 * cross.real + _poly_integral(p, p, big_t)
-
-
-@njit(cache=True, inline='always')
-def _poly_integral(pa, pb, big_t):
-    """Integral over [0, T] of the product of two cubic polynomials."""
-    out = 0.0
-    for i in range(NPOLY):
-        if pa[i] == 0.0:
-            continue
-        for j in range(NPOLY):
-            if pb[j] != 0.0:
-                tp = big_t
-                for _ in range(i + j):
-                    tp *= big_t
-                out += pa[i] * pb[j] * tp / (i + j + 1)
-    return out
+    return quad.real + 2.0 * cross.real + poly_integral(p, p, big_t)
 
 
 @njit(cache=True, inline='always')
@@ -257,7 +241,7 @@ def integrate_modal(s, n, work, cu1, tau, units, mode, load_vec, record, r0, r1,
                     pu[0, 0] += li * P[i, 1]
                     pu[0, 1] += li * 2.0 * P[i, 2]
                     pu[0, 2] += li * 3.0 * P[i, 3]
-            diag[D_WORK] += acc.real + _poly_integral(pu[0], pu[1], tau)
+            diag[D_WORK] += acc.real + poly_integral(pu[0], pu[1], tau)
         # viscous dissipation of v_r = V diag(kap) w exp(kap tau) + u1 in the reduced damping C_r
         quad = 0.0 + 0.0j
         for k in range(2 * n):

@@ -529,7 +529,13 @@ def int_prod(big_t, pair, single, ca, pa, cb, pb):
             inner += pb[m] * single[j, m]
             cross += pa[m] * single[j, m]
         acc += ca[j] * inner + cb[j] * cross
-    out = acc.real
+    return acc.real + poly_integral(pa, pb, big_t)
+
+
+@njit(cache=True, inline='always')
+def poly_integral(pa, pb, big_t):
+    """Integral over [0, T] of the product of two cubic polynomials."""
+    out = 0.0
     for i in range(NPOLY):
         if pa[i] == 0.0:
             continue

@@ -36,13 +36,14 @@ from __future__ import annotations
 import math
 import os
 import re
-import tempfile
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from ..io import atomic_path
 
 FORMAT_VERSION = 1
 KINDS = ("free_decay", "forced_sweep_point", "drop_test")
@@ -558,25 +559,9 @@ def write_record(path: str | os.PathLike, record: Record | tuple[Mapping[str, An
         record = make_record(header, columns)
     else:  # re-validate: a Record may have been built by hand
         record = make_record(record.header, record.columns)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
+    with atomic_path(path) as tmp:
         if path.suffix == ".nc":
-            os.close(fd)
-            _write_netcdf(tmp, record)
-            with open(tmp, "rb") as fh:
-                os.fsync(fh.fileno())
+            _write_netcdf(str(tmp), record)
         else:
-            with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
-                fh.write(_csv_text(record))
-                fh.flush()
-                os.fsync(fh.fileno())
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
+            tmp.write_text(_csv_text(record), encoding="utf-8", newline="\n")
     return path

@@ -48,7 +48,8 @@ from .. import _kernels as K
 from ..core.jitcache import purge_stale_cache
 from ..core.sampler import paper_free_flight, paper_state
 from ..params import Protocol, System
-from ..simulate import STICK_VELOCITY, ensure_compiled, initial_state, param_vector as model_param_vector, pid_data
+from ..simulate import STICK_VELOCITY, ensure_compiled, initial_state, pid_data
+from ..simulate import param_vector as model_param_vector
 from . import rig as R
 from .analysis import (
     UnresolvedPeakError,
