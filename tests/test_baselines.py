@@ -358,3 +358,24 @@ def test_unresolved_accumulation_fails_fast():
                 simulate_rk4(s, 1.0, 70.0, 0.0, dt=0.01, v_stick=0.0, h_stick=0.0)):
         assert res.status.startswith("failed:") and "accumulat" in res.status, res.status
         assert res.n_impacts < 20000
+
+
+def test_stability_ok_means_finished_and_within_tolerance():
+    import pandas as pd
+
+    from impact.numerics import judge_stability
+
+    rows = [  # case a: the core and three baselines; case b: the core failed, nothing to compare with
+        {"case": "a", "method": "core", "status": "ok", "finite": True, "max_penetration": 0.0, "amplitude": 2.0},
+        {"case": "a", "method": "close", "status": "ok", "finite": True, "max_penetration": 1e-9, "amplitude": 2.001},
+        {"case": "a", "method": "sinks", "status": "ok", "finite": True, "max_penetration": 0.3, "amplitude": 2.0},
+        {"case": "a", "method": "off", "status": "ok", "finite": True, "max_penetration": 0.0, "amplitude": 2.1},
+        {"case": "b", "method": "core", "status": "ok", "finite": False, "max_penetration": 0.0,
+         "amplitude": float("nan")},
+        {"case": "b", "method": "close", "status": "ok", "finite": True, "max_penetration": 0.0, "amplitude": 1.0},
+        {"case": "b", "method": "broken", "status": "failed: Timeout", "finite": False},
+    ]
+    judged = judge_stability(pd.DataFrame(rows), {"a": 1.0, "b": 0.0}).set_index(["case", "method"])["ok"]
+    assert judged.to_dict() == {("a", "core"): True, ("a", "close"): True, ("a", "sinks"): False,
+                                ("a", "off"): False, ("b", "core"): False, ("b", "close"): True,
+                                ("b", "broken"): False}

@@ -450,3 +450,23 @@ def test_units_of_equal_mass_but_different_tuning_stay_distinct():
     np.testing.assert_allclose(swapped.samples["q"][:, 0], one.samples["q"][:, 0], rtol=0, atol=1e-6 * scale)
     # the two pendulums really move differently
     assert np.max(np.abs(one.samples["q"][:, 1] - one.samples["q"][:, 2])) > 0.1
+
+
+def test_mode_weights_pair_conjugates_by_value_only():
+    """Half rows sum one mode of each conjugate pair twice: pairs must be real pairs, found by value."""
+    from impact.core.modal import mode_weights
+
+    def weights(kap):
+        wt = np.zeros(len(kap))
+        mode_weights(np.asarray(kap, dtype=complex), wt)
+        return wt.tolist()
+
+    pair = [-0.1 + 6j, -0.1 - 6j]
+    assert weights(pair) == [2.0, 0.0]
+    assert weights(pair[::-1]) == [0.0, 2.0]
+    # a real mode whose imaginary part is round-off of either sign keeps its weight, whatever its neighbours
+    assert weights([-1e10 - 1e2j, -3.0 + 1e-20j, -0.1 + 6j, -0.1 - 6j]) == [1.0, 1.0, 2.0, 0.0]
+    # near critical damping the pair is summed in full (its coefficients cancel)
+    assert weights([-1.0 + 0.01j, -1.0 - 0.01j]) == [1.0, 1.0]
+    # repeated pairs (identical units) match one to one; unmatched modes and zero padding keep weight 1
+    assert weights([-0.1 + 6j, -0.1 + 6j, -0.1 - 6j, -0.1 - 6j, 0j, -0.2 + 3j]) == [2.0, 2.0, 0.0, 0.0, 1.0, 1.0]

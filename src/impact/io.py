@@ -28,7 +28,9 @@ def _umask() -> int:
 
 
 def publish(tmp, path) -> None:
-    """Give a finished temporary file ordinary permissions and move it into place."""
+    """Flush a finished temporary file to disk, give it ordinary permissions and move it into place."""
+    with open(tmp, "rb") as fh:
+        os.fsync(fh.fileno())
     os.chmod(tmp, 0o666 & ~_umask())
     os.replace(tmp, path)
 

@@ -315,6 +315,8 @@ def judge_stability(table: pd.DataFrame, gaps: dict) -> pd.DataFrame:
 
     ok means finished and within tolerance: penetration <= OK_PENETRATION of the gap and amplitude
     within OK_AMPLITUDE of the core's.  A run that finishes but sinks 0.3 units into a wall is not ok.
+    Where the core itself gave no amplitude (it failed or hit its event cap) there is nothing to compare
+    with: amplitude_error is NaN and only the penetration is judged.
     """
     table = table.copy()
     core = table[table["method"] == "core"].set_index("case")["amplitude"]
@@ -326,6 +328,7 @@ def judge_stability(table: pd.DataFrame, gaps: dict) -> pd.DataFrame:
     ref = table["case"].map(core).astype(float)
     table["amplitude_error"] = (amp - ref).abs() / ref.abs()
     finished = (table["status"] == "ok") & table["finite"].fillna(False).astype(bool)
-    within = (table["penetration_over_gap"] <= OK_PENETRATION) & (table["amplitude_error"] <= OK_AMPLITUDE)
+    near_core = (table["amplitude_error"] <= OK_AMPLITUDE) | ref.isna()
+    within = (table["penetration_over_gap"] <= OK_PENETRATION) & near_core
     table["ok"] = finished & within
     return table

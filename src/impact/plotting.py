@@ -243,7 +243,10 @@ def plot_stability_map(table, outputs) -> None:
         failed = not str(row["status"]).startswith("ok") or not row["finite"]
         grid[i, j] = 2 if failed else (0 if row["ok"] else 1)
         pen = row.get("max_penetration", np.nan)
-        label = "failed" if failed else (f"pen {pen:.0e}" if np.isfinite(pen) and pen > 0 else "ok")
+        if failed or not (np.isfinite(pen) and pen > 0):
+            label = "failed" if failed else ("ok" if row["ok"] else "amplitude off")
+        else:
+            label = f"pen {pen:.0e}"
         ax.text(j, i, label, ha="center", va="center", fontsize=6)
     from matplotlib.colors import ListedColormap
 

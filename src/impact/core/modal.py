@@ -20,7 +20,7 @@ freedom.  The harmonic load's two extra slots are added where it is present.
 
 Every row is real, so its terms come in conjugate pairs: Re sum_k c_k e^(kap_k t)
 equals Re sum_k wt_k c_k e^(kap_k t) with weight 2 on one mode of each pair, 0
-on its partner and 1 on a real mode (mode_weights).  Whatever is linear in a
+on its partner and 1 on a real mode or a pair near critical damping (mode_weights).  Whatever is linear in a
 row (its values, derivatives, bounds) is therefore computed on the weighted
 half row, with half the exponentials; a product of two rows is not linear,
 so its double sum keeps every l and halves only the outer sum over k.
@@ -44,24 +44,38 @@ def modal_tables(slots, nmax, nmon):
             np.zeros((slots, nmon, m2)), np.zeros((slots, m2)))
 
 
-_PAIR_TOL = 1e-9  # |Im kap| below this fraction of |kap|: a real mode (weight 1), not one of a pair
-
-
-@njit(cache=True)
-def mode_weight(kap_k):
-    """2 for the upper mode of a conjugate pair, 0 for its partner, 1 for a real mode (see the module doc)."""
-    tol = _PAIR_TOL * abs(kap_k)
-    if kap_k.imag > tol:
-        return 2.0
-    if kap_k.imag < -tol:
-        return 0.0
-    return 1.0
+_PAIR_TOL = 1e-9  # two modes are a conjugate pair when they are conjugates to this fraction of |kap|
+# below this |Im kap| / |kap| (damping ratio above 0.995) a pair is summed in full: near critical damping
+# its two coefficients are large and cancel, and the half row would lose that cancellation
+_PAIR_MIN = 0.1
 
 
 @njit(cache=True)
 def mode_weights(kap, wt):
-    for k in range(kap.shape[0]):
-        wt[k] = mode_weight(kap[k])
+    """Weight 2 on the upper mode of each conjugate pair and 0 on its partner, found by value; 1 elsewhere.
+
+    Pairs are matched explicitly, never guessed from the sign of Im kap alone: the eigenvalues come from a
+    complex eigensolver, so a real mode may carry a rounding error in its imaginary part, and it keeps
+    weight 1 whatever the sign of that error.  Repeated pairs (identical units) match one to one.
+    """
+    n = kap.shape[0]
+    for k in range(n):
+        wt[k] = 1.0
+    for k in range(n):
+        a = kap[k]
+        if not a.imag > _PAIR_MIN * abs(a):
+            continue
+        partner = -1
+        closest = _PAIR_TOL * abs(a)
+        for j in range(n):
+            if j != k and wt[j] == 1.0 and kap[j].imag < 0.0:
+                gap = abs(kap[j] - a.conjugate())
+                if gap <= closest:
+                    partner = j
+                    closest = gap
+        if partner >= 0:
+            wt[k] = 2.0
+            wt[partner] = 0.0
 
 
 @njit(cache=True, inline='always')
@@ -103,8 +117,8 @@ def modal_slot(s, key, cache, nf, units, mode, mon_rows, mon_kind, mtab):
             for b in range(n):
                 acc += cred[s, a, b] * vec[s, b, l]
             cv[a, l] = acc
+    mode_weights(lam[s, :2 * n], mwt[s, :2 * n])
     for k in range(2 * n):
-        mwt[s, k] = mode_weight(lam[s, k])
         lk = 0.0 + 0.0j
         for r in range(n):
             lk += ellr[s, r] * vec[s, r, k]
@@ -124,7 +138,7 @@ def modal_slot(s, key, cache, nf, units, mode, mon_rows, mon_kind, mtab):
             if mon_kind[m] == MON_ACCEL:
                 acc *= lam[s, k] * lam[s, k]
             mvec[s, m, k] = acc
-            mbnd[s, m, k] = mwt[s, k] * abs(acc) * abs(lam[s, k]) ** 2  # for the weighted half row
+            mbnd[s, m, k] = abs(acc) * abs(lam[s, k]) ** 2
     mkey[s] = key
 
 
@@ -177,12 +191,12 @@ def end_values(ek, c, p, big_t):
 
 
 @njit(cache=True, inline='always')
-def curvature_bound(s, m, n, aw, cm, pm, kpow, big_t, harmonic, mtab):
-    """Bound on |h''| over [0, T] of monitor m's row: the tabulated modal part, then the rest."""
+def curvature_bound(s, m, n, aw, wt, cm, pm, kpow, big_t, harmonic, mtab):
+    """Bound on |h''| over [0, T] of monitor m's (halved) row: the tabulated modal part, then the rest."""
     mbnd = mtab[4]
     acc = 0.0
     for k in range(2 * n):
-        acc += mbnd[s, m, k] * aw[k]
+        acc += wt[k] * mbnd[s, m, k] * aw[k]
     if harmonic:
         nt = cm.shape[0]
         for k in range(nt - 2, nt):

@@ -404,7 +404,7 @@ def monitor_modal(s, n, wc, aw, kap, kpow, ek, C, P, tau, t, t_win, monitors, r0
         h0, h1 = end_values(ek, cm, pm, tau)
         ends = max(abs(h0), abs(h1))
         peak = mon_peak[m]
-        if ends > peak or ends + curvature_bound(s, m, n, aw, cm, pm, kpow, tau, harmonic, mtab) * tau * tau / 8.0 \
+        if ends > peak or ends + curvature_bound(s, m, n, aw, wt, cm, pm, kpow, tau, harmonic, mtab) * tau * tau / 8.0 \
                 > peak * (1.0 + PEAK_RTOL):
             peak, at = peak_abs(kap, kpow, ek, cm, pm, tau, peak, stack)
             if at == -2.0:
