@@ -16,7 +16,7 @@ import yaml
 
 import impact
 from impact import archive
-from impact.dataset import write_netcdf
+from impact.io import write_dataset
 
 MARKER = 1234.5678901234  # a value that occurs once in the uncompressed dataset's bytes
 CONFIG = {"structure": {"beta": 0.0048}, "protocol": {"periods": 40}, "figures": {"fig08": {}}}
@@ -44,7 +44,7 @@ def _plain_copy(src: Path, dst: Path, **kw) -> None:
 def tree(tmp_path) -> Path:
     root = tmp_path / "work"
     res = root / "results"
-    write_netcdf(_dataset(), res / "sweeps" / "cid_a.nc")  # compressed, as the pipeline writes them
+    write_dataset(_dataset(), res / "sweeps" / "cid_a.nc")  # compressed, as the pipeline writes them
     _plain_copy(res / "sweeps" / "cid_a.nc", res / "sweeps" / "plain.nc")  # a value's bytes are findable
     (res / "figures").mkdir(parents=True)
     (res / "figures" / "fig08.png").write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(range(256)) * 4)
@@ -225,7 +225,7 @@ def test_missing_and_extra_entries_are_found(tree, tmp_path):
 
 def test_content_hash_sees_values_attributes_and_coordinates_not_storage(tmp_path):
     base = archive.dataset_content_sha256(_dataset())
-    write_netcdf(_dataset(), tmp_path / "a.nc")
+    write_dataset(_dataset(), tmp_path / "a.nc")
     _plain_copy(tmp_path / "a.nc", tmp_path / "b.nc", format="NETCDF4_CLASSIC")
     assert archive.netcdf_content_sha256(tmp_path / "a.nc") == archive.netcdf_content_sha256(tmp_path / "b.nc")
 

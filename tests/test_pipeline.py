@@ -68,10 +68,10 @@ def test_sweep_dataset_is_self_describing_and_round_trips(smoke, tmp_path):
     # the reductions are those of the per-frequency data
     np.testing.assert_array_equal(ds["x_max"].values, ds["amplitude"].max("freq_ratio").values)
     # round trip: write with the library's writer, read back, identical data and attributes
-    from impact.dataset import write_netcdf
+    from impact.io import write_dataset
 
     again = tmp_path / "again.nc"
-    write_netcdf(ds, again)
+    write_dataset(ds, again)
     with xr.open_dataset(again) as back:
         xr.testing.assert_identical(back.load(), ds)
     with xr.open_dataset(smoke / "results" / "sweeps" / "pid_mu0.01_e0.25_rp1.nc") as pid:

@@ -194,11 +194,12 @@ def cmd_sweep(args) -> dict:
         },
     }
     if args.out:
-        from .dataset import curve_dataset, write_netcdf
+        from .dataset import curve_dataset
+        from .io import write_dataset
 
         ds = curve_dataset(system, [args.gap_ratio], [protocol.start], [[result]], protocol,
                            curve={"command": "impact " + " ".join(sys.argv[1:])})
-        write_netcdf(ds, args.out)
+        write_dataset(ds, args.out)
         out["out"] = args.out
     return out
 

@@ -9,12 +9,10 @@ fields when nu = 0.
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
-from .io import write_dataset
 from .params import Protocol, System
 from .provenance import attributes
 
@@ -128,8 +126,3 @@ def _attributes(base: System, protocol: Protocol, curve, config, sweep_mode) -> 
     if config is not None:
         attrs["config"] = json.dumps(config, sort_keys=True)
     return attrs
-
-
-def write_netcdf(ds: xr.Dataset, path) -> Path:
-    """Write a dataset of the study (impact.io.write_dataset: atomic, CF attributes, provenance)."""
-    return write_dataset(ds, path)

@@ -285,7 +285,8 @@ def stability(cfg: dict, log=None) -> pd.DataFrame:
     limit = float(cfg.get("time_limit", 60.0))
     t_end = 2 * math.pi * periods
     rows = []
-    for case, (system, r, start) in extreme_cases(cfg).items():
+    cases = extreme_cases(cfg)
+    for case, (system, r, start) in cases.items():
         for method, setting in stability_methods(cfg).items():
             seconds, out = timed(lambda: run_method(method, setting, system, r, start, t_end, 0.5 * t_end), limit)
             row = {"case": case, "method": method, "setting": setting, "wall_time": seconds}
@@ -302,7 +303,7 @@ def stability(cfg: dict, log=None) -> pd.DataFrame:
             if log:
                 log.info("%s %s: %s (%.2f s)", case, method, row["status"], seconds)
             rows.append(row)
-    return judge_stability(pd.DataFrame(rows), {case: system.gap for case, (system, _, _) in extreme_cases(cfg).items()})
+    return judge_stability(pd.DataFrame(rows), {case: system.gap for case, (system, _, _) in cases.items()})
 
 
 # a run is ok when it finished with a finite state, kept out of the walls and agreed with the exact core

@@ -9,8 +9,6 @@ import sys
 import time
 from pathlib import Path
 
-from .io import publish, write_csv_atomic, write_json_atomic, write_text_atomic  # noqa: F401 (the scripts' names)
-
 
 @contextlib.contextmanager
 def logged(path):

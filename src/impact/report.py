@@ -35,7 +35,7 @@ import struct
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
-from .pipeline import write_text_atomic
+from .io import write_text_atomic
 
 log = logging.getLogger(__name__)
 

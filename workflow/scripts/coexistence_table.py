@@ -4,7 +4,8 @@ import json
 import xarray as xr
 
 from impact.comparison import X_M_AT_OPTIMUM, coexistence_table, e_trend_statement
-from impact.pipeline import logged, write_csv_atomic, write_json_atomic
+from impact.io import write_csv_atomic, write_json_atomic
+from impact.pipeline import logged
 from impact.study import curve_id
 
 with logged(snakemake.log[0]) as log:

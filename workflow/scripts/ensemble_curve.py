@@ -2,7 +2,7 @@
 import json
 
 from impact.coexistence import ensemble_members, run_ensemble
-from impact.dataset import write_netcdf
+from impact.io import write_dataset
 from impact.params import Protocol
 from impact.pipeline import log_versions, logged
 from impact.provenance import attributes
@@ -18,4 +18,4 @@ with logged(snakemake.log[0]) as log:
     ds.attrs.update(title="Initial-condition ensemble of a CID curve", Conventions="CF-1.10",
                     seed=int(ens.get("seed", 20261122)), parameters=json.dumps(study["spec"]),
                     config=json.dumps(cfg, sort_keys=True), **attributes())
-    write_netcdf(ds, snakemake.output[0])
+    write_dataset(ds, snakemake.output[0])

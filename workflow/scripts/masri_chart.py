@@ -1,5 +1,5 @@
 """Glue: the closed form's existence/stability chart -> dataset."""
-from impact.dataset import write_netcdf
+from impact.io import write_dataset
 from impact.masri_check import chart_dataset
 from impact.pipeline import logged
 from impact.provenance import attributes
@@ -8,4 +8,4 @@ with logged(snakemake.log[0]):
     p = snakemake.params
     ds = chart_dataset(p.chart, p.structure["beta"], p.structure["force_ratio"])
     ds.attrs.update(title="Masri 2-EIPC stability chart", **attributes())
-    write_netcdf(ds, snakemake.output[0])
+    write_dataset(ds, snakemake.output[0])

@@ -1,8 +1,8 @@
 """Glue: the closed-form check over a grid -> dataset, table and summary."""
-from impact.dataset import write_netcdf
+from impact.io import write_csv_atomic, write_dataset, write_json_atomic
 from impact.masri_check import limits_statement, run_check, summary, to_dataset
 from impact.params import Protocol
-from impact.pipeline import logged, write_csv_atomic, write_json_atomic
+from impact.pipeline import logged
 from impact.provenance import attributes
 from impact.simulate import frequency_grid
 
@@ -17,6 +17,6 @@ with logged(snakemake.log[0]) as log:
     log.info("%s", result)
     attrs = {"title": "Masri's closed-form 2-EIPC orbit against the exact simulator", "Conventions": "CF-1.10",
              "beta": p.structure["beta"], "force_ratio": p.structure["force_ratio"], **attributes()}
-    write_netcdf(to_dataset(table, attrs), snakemake.output.dataset)
+    write_dataset(to_dataset(table, attrs), snakemake.output.dataset)
     write_csv_atomic(snakemake.output.table, table[table["admissible"]])
     write_json_atomic(snakemake.output.summary, result)

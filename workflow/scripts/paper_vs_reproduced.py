@@ -4,7 +4,8 @@ import json
 import xarray as xr
 
 from impact.comparison import paper_vs_reproduced
-from impact.pipeline import logged, write_csv_atomic
+from impact.io import write_csv_atomic
+from impact.pipeline import logged
 
 with logged(snakemake.log[0]) as log:
     datasets = {}

@@ -1,5 +1,5 @@
 """Glue: one curve's sweeps -> results/sweeps/<curve>.nc."""
-from impact.dataset import write_netcdf
+from impact.io import write_dataset
 from impact.pipeline import log_versions, logged
 from impact.study import run_curve
 
@@ -8,4 +8,4 @@ with logged(snakemake.log[0]) as log:
     study = snakemake.params.study
     cfg = {key: study[key] for key in ("structure", "protocol", "friction") if key in study}
     log.info("curve %s", study["spec"])
-    write_netcdf(run_curve(cfg, study["spec"]), snakemake.output[0])
+    write_dataset(run_curve(cfg, study["spec"]), snakemake.output[0])

@@ -1,5 +1,6 @@
 """Glue: the optimum TMD -> results/tables/tmd_optimum.json."""
-from impact.pipeline import logged, write_json_atomic
+from impact.io import write_json_atomic
+from impact.pipeline import logged
 from impact.tmd import den_hartog, tmd_optimum
 
 with logged(snakemake.log[0]) as log:

@@ -41,7 +41,7 @@ def modal_tables(slots, nmax, nmon):
     m2 = 2 * nmax
     return (np.full(slots, -1, dtype=np.int64), np.zeros((slots, m2, m2), dtype=np.complex128),
             np.zeros((slots, m2), dtype=np.complex128), np.zeros((slots, nmon, m2), dtype=np.complex128),
-            np.zeros((slots, nmon, m2)), np.zeros((slots, m2)))
+            np.zeros((slots, nmon, m2)))
 
 
 _PAIR_TOL = 1e-9  # two modes are a conjugate pair when they are conjugates to this fraction of |kap|
@@ -103,7 +103,7 @@ def _reduced_index(s, fidx, nf, units, mode, red):
 @njit(cache=True)
 def modal_slot(s, key, cache, nf, units, mode, mon_rows, mon_kind, mtab):
     """Fill slot s of the modal tables for configuration `key` (a no-op when they are current)."""
-    mkey, gvis, lmod, mvec, mbnd, mwt = mtab
+    mkey, gvis, lmod, mvec, mbnd = mtab
     if mkey[s] == key:
         return
     nr, lam, vec, cred, fidx, ellr = cache[1], cache[2], cache[3], cache[6], cache[7], cache[8]
@@ -117,7 +117,6 @@ def modal_slot(s, key, cache, nf, units, mode, mon_rows, mon_kind, mtab):
             for b in range(n):
                 acc += cred[s, a, b] * vec[s, b, l]
             cv[a, l] = acc
-    mode_weights(lam[s, :2 * n], mwt[s, :2 * n])
     for k in range(2 * n):
         lk = 0.0 + 0.0j
         for r in range(n):
@@ -224,15 +223,16 @@ def square_integral(c, p, wt, pair, single, big_t):
 
 
 @njit(cache=True, inline='always')
-def integrate_modal(s, n, work, cu1, tau, units, mode, load_vec, record, r0, r1, P, pair, single, mtab, cache,
+def integrate_modal(s, n, work, cu1, wt, tau, units, mode, load_vec, record, r0, r1, P, pair, single, mtab, cache,
                     pu, diag):
     """Exact work of a record load, viscous dissipation and stuck time over [0, tau], from the modal tables.
 
     work: build_segment's scratch, with the modal amplitudes w in work[1][2n:4n] and the particular
     solution's (constant) reduced velocities u1 in work[0][2n:3n]; cu1: scratch of the reduced size;
+    wt: the segment's mode weights (mode_weights), which halve the sums over k;
     pair, single: integral_tables over tau; pu: (2, NPOLY) scratch.
     """
-    gvis, lmod, mwt = mtab[1], mtab[2], mtab[5]
+    gvis, lmod = mtab[1], mtab[2]
     lam, vec, cred = cache[2], cache[3], cache[6]
     wf, wc = work
     W = 2 * n
@@ -242,8 +242,8 @@ def integrate_modal(s, n, work, cu1, tau, units, mode, load_vec, record, r0, r1,
             # work: f = r0 + r1 tau against l^T v, the modal part, then the polynomial parts of every row
             acc = 0.0 + 0.0j
             for k in range(2 * n):
-                if mwt[s, k] != 0.0:
-                    acc += mwt[s, k] * lmod[s, k] * wc[W + k] * (r0 * single[k, 0] + r1 * single[k, 1])
+                if wt[k] != 0.0:
+                    acc += wt[k] * lmod[s, k] * wc[W + k] * (r0 * single[k, 0] + r1 * single[k, 1])
             for k in range(NPOLY):
                 pu[0, k] = 0.0
                 pu[1, k] = 0.0
@@ -259,12 +259,12 @@ def integrate_modal(s, n, work, cu1, tau, units, mode, load_vec, record, r0, r1,
         # viscous dissipation of v_r = V diag(kap) w exp(kap tau) + u1 in the reduced damping C_r
         quad = 0.0 + 0.0j
         for k in range(2 * n):
-            if mwt[s, k] == 0.0:
+            if wt[k] == 0.0:
                 continue
             inner = 0.0 + 0.0j
             for l in range(2 * n):
                 inner += gvis[s, k, l] * pair[k, l] * wc[W + l]
-            quad += mwt[s, k] * wc[W + k] * inner
+            quad += wt[k] * wc[W + k] * inner
         steady = 0.0
         for a in range(n):
             ca = 0.0
@@ -274,12 +274,12 @@ def integrate_modal(s, n, work, cu1, tau, units, mode, load_vec, record, r0, r1,
             steady += wf[U1 + a] * ca
         cross = 0.0 + 0.0j
         for k in range(2 * n):
-            if mwt[s, k] == 0.0:
+            if wt[k] == 0.0:
                 continue
             hk = 0.0 + 0.0j
             for a in range(n):
                 hk += vec[s, a, k] * cu1[a]
-            cross += mwt[s, k] * wc[W + k] * lam[s, k] * hk * single[k, 0]
+            cross += wt[k] * wc[W + k] * lam[s, k] * hk * single[k, 0]
         diag[D_VISC] += quad.real + 2.0 * cross.real + steady * tau
     for j in range(mode.shape[0]):
         if mode[j] != MODE_FREE and mode[j] != MODE_LOCKED:

@@ -746,11 +746,11 @@ def segment_load(p, record, harm, t, t_end):
 
 
 @njit(cache=True, inline='always')
-def integrate_energy(s, n, work, cu1, tau, nf, building, units, springs, mode, load_vec, harm, record, theta0,
+def integrate_energy(s, n, work, cu1, wt, tau, nf, building, units, springs, mode, load_vec, harm, record, theta0,
                      r0, r1, kap, C, P, pair, single, mtab, cache, cv, pv, cu, pu, diag):
     """The energy terms over the segment: from the modal tables under a record, from the rows under a harmonic."""
     if harm is None:
-        integrate_modal(s, n, work, cu1, tau, units, mode, load_vec, record, r0, r1, P, pair, single, mtab, cache,
+        integrate_modal(s, n, work, cu1, wt, tau, units, mode, load_vec, record, r0, r1, P, pair, single, mtab, cache,
                         pu, diag)
     else:
         integrate_segment(kap, C, P, tau, nf, building, units, springs, mode, load_vec, harm, record,
@@ -909,7 +909,7 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
             step_tables(s, key, tau, p[P_REC_DT] if record is not None else -1.0, kap, ek, pair, single, dtab)
             tab_key = key
             tab_tau = tau
-        integrate_energy(s, n, work, cu1, tau, nf, building, units, springs, mode, load_vec, harm, record, theta0,
+        integrate_energy(s, n, work, cu1, wt, tau, nf, building, units, springs, mode, load_vec, harm, record, theta0,
                          r0, r1, kap, C, P, pair, single, mtab, cache, cv, pv, cu, pu, diag)
         monitor_modal(s, n, wc, aw, kap, kpow, ek, C, P, tau, t, p[P_TWIN], monitors, r0, r1, harm is not None, mtab,
                       pair, single, cm, pm, cs, ps, stack, wt, mon_peak, mon_peak_t, mon_x2, diag)

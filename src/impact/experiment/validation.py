@@ -1293,7 +1293,7 @@ def plot_histories(data: dict, paths) -> list[Path]:
 
 
 def _write_text(path: Path, text: str) -> None:
-    from ..pipeline import write_text_atomic
+    from ..io import write_text_atomic
 
     write_text_atomic(path, text)
 
