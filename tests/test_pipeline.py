@@ -124,18 +124,24 @@ def test_the_cf_checker_finds_no_high_priority_fault_in_any_dataset(smoke, tmp_p
 
 
 def test_a_registered_figure_reaches_the_report_and_the_archive(smoke, tmp_path):
-    """One rule and its register() line, and nothing else, put a new figure in the report and the archive."""
+    """One rule (registered) and one caption file, and nothing else, put a new figure in the report and archive."""
     import shutil
     import tarfile
 
     work = tmp_path / "copy"
     shutil.copytree(smoke, work, symlinks=True)
+    (work / "workflow" / "report" / "dummy_figure.rst").write_text("**A dummy figure.** A line, to prove the point.\n")
     with open(work / "workflow" / "rules" / "figures.smk", "a") as smk:
         smk.write('''
 
 rule dummy_figure:
     output:
-        png="results/figures/dummy_figure.png",
+        png=report(
+            "results/figures/dummy_figure.png",
+            caption="../report/dummy_figure.rst",
+            category=SECTIONS["figures"],
+            subcategory="A dummy figure",
+        ),
     log:
         "results/logs/dummy_figure.log",
     benchmark:
@@ -155,7 +161,8 @@ register(rules.dummy_figure, report=("png",))
 ''')
     _snakemake(work, "all", "archive", "--cores", "2", "--configfile", "config/smoke.yaml")
     page = (work / "results" / "report" / "index.html").read_text()
-    assert '<section id="dummy_figure"' in page
+    assert '<section id="dummy_figure"><h3>A dummy figure</h3>' in page
+    assert "<strong>A dummy figure.</strong> A line, to prove the point." in page
     (archive,) = (work / "results" / "archive").glob("*.tar.gz")
     with tarfile.open(archive) as tar:
         assert any(name.endswith("results/figures/dummy_figure.png") for name in tar.getnames())

@@ -86,10 +86,32 @@ def results(tmp_path) -> Path:
     return res
 
 
+REPORT = ROOT / "workflow" / "report"
+TEMPLATE = REPORT / "index.html.j2"
+
+
+def _entries(results: Path) -> list[dict]:
+    """Sections as the workflow's registry gives them (targets.smk report_sections()), in its order."""
+    def entry(path, caption, category, title, **wildcards):
+        return {"path": str(results / path), "caption": str(REPORT / f"{caption}.rst"), "category": category,
+                "subcategory": title, "wildcards": wildcards}
+
+    return [
+        entry("tables/tmd_optimum.json", "tmd_optimum", "2. Figures", "TMD optimum"),
+        entry("figures/fig08.png", "figure", "2. Figures", "Fig. 8", fig="fig08"),
+        entry("figures/fig99.png", "figure", "2. Figures", "Fig. 99", fig="fig99"),
+        entry("tables/paper_vs_reproduced.csv", "paper_vs_reproduced", "1. Paper", "Paper vs ours"),
+        entry("tables/masri_check.csv", "masri_check", "4. Masri", "Point by point"),
+        entry("tables/cross_validation.csv", "cross_validation", "3. Experiment", "Not built in this tree"),
+        entry("figures/numerics_error_runtime.png", "numerics_error_runtime", "6. Numerics", "Error"),
+    ]
+
+
 def _build(results: Path, **kw) -> tuple[Path, str, dict]:
-    sections = report.standard_sections(results, config=CONFIG)
+    sections = report.sections_from_registry(_entries(results), CONFIG)
     prov = report.collect_provenance(CONFIG, executor="local-test", benchmarks=results / "benchmarks")
-    out = report.build_report(results / "report" / "index.html", sections, prov)
+    overview = report.render_caption(REPORT / "workflow.rst", config=CONFIG)
+    out = report.build_report(results / "report" / "index.html", sections, prov, TEMPLATE, overview)
     return out, out.read_text(encoding="ascii"), prov
 
 
@@ -151,30 +173,51 @@ def _check(page: str) -> _Checker:
     return c
 
 
+@pytest.fixture(autouse=True)
+def _in_the_repository(monkeypatch):
+    """Captions include one another by path from the working folder, as in Snakemake's report."""
+    monkeypatch.chdir(ROOT)
+
+
 def test_report_shows_every_given_section_from_the_files(results):
     out, page, prov = _build(results)
     assert out == results / "report" / "index.html"
     ids = re.findall(r'<section id="([^"]+)"', page)
-    assert ids == ["overview", "paper_vs_reproduced", "fig08", "fig99", "tmd_optimum", "masri_check",
+    # grouped by category, in the order of their numbered names; the registry's order within one
+    assert ids == ["overview", "paper_vs_reproduced", "tmd_optimum", "fig08", "fig99", "masri_check",
                    "numerics_error_runtime", "provenance"]
+    assert re.findall(r"<h2>([^<]+)</h2>", page) == ["The study", "1. Paper", "2. Figures", "4. Masri",
+                                                     "6. Numerics", "Provenance of this run"]
     # files that do not exist give no section
-    assert 'id="cross_validation"' not in page and 'id="numerics_stability"' not in page
+    assert 'id="cross_validation"' not in page and "Not built in this tree" not in page
     # the comparison: rows not within 10 % are highlighted, with their reason (escaped)
     assert page.count('<tr class="miss">') == 2
-    assert "initial condition matters: start &#x27;left&#x27; gives 0.314 &lt;&amp;&gt;" in page
+    assert "initial condition matters: start &#39;left&#39; gives 0.314 &lt;&amp;&gt;" in page
     assert "order differs for this start" in page
     assert "3 of 5 comparisons agree with the paper within 10 %" in page
     # every number of the file is in the page: shown rounded, exact in the tooltip
     assert 'title="0.4353203017068163">0.4353</td>' in page
-    # figures: embedded PNGs, default caption for fig08 (the paper's values), generic for fig99
+    # figures: embedded PNGs; captions from the workflow's caption files, with their Jinja applied
     assert page.count('src="data:image/png;base64,') == 3
-    assert "The paper reads X_m = 0.32 at the optimum gap" in page
-    assert html.escape(report.GENERIC_FIGURE_CAPTION.format(name="fig99")) in page
-    assert "Against the paper: 1 of 2 of this figure&#x27;s reported values agree" in page
+    assert "The paper reads X_m = 0.32 at the optimum gap" in page  # fig08.rst, included by figure.rst
+    assert "Figure fig99 of the study" in page and "figures: fig99</span>" in page
+    assert "Against the paper: 1 of 2 of this figure&#39;s reported values agree" in page
     # closed-form check: rendered with a summary line computed from the table
     assert "3 rows; agrees: 2 of 3 true" in page
-    # the overview states this run's protocol, from the configuration
-    assert "40 natural periods per run, amplitude measured from period 20 on" in page
+    # the overview is the workflow's description, with this run's protocol from the configuration
+    assert "<h1>Impact dampers for civil structures: a reproducible study</h1>" in page
+    assert "40 natural periods per run, amplitude from period\n20 on" in page
+
+
+def test_every_caption_file_renders_without_a_docutils_warning():
+    wildcards = {"figure": {"fig": "fig08"}, "coexistence_figure": {"curve": "cid_mu0.01_e0.25"},
+                 "hysteresis_figure": {"curve": "cid_mu0.01_e0.25"}}
+    for path in sorted(REPORT.glob("*.rst")):
+        # halt_level 3: an rst error (a broken include, bad markup) raises instead of printing into the page
+        body = report.render_caption(path, wildcards.get(path.stem), CONFIG)["body"]
+        assert len(body) > 100 and "System Message" not in body, path.name
+    assert "Coexisting steady states of cid_mu0.01_e0.25" in report.render_caption(
+        REPORT / "coexistence_figure.rst", wildcards["coexistence_figure"])["body"]
 
 
 def test_provenance_section(results):
@@ -213,39 +256,18 @@ def test_report_is_valid_self_contained_html(results):
     assert sorted(p.name for p in out.parent.iterdir()) == ["index.html"]
 
 
-def test_sections_as_a_dict_and_only_when_given(tmp_path, results):
-    sections = {
-        "intro": {"title": "Intro", "kind": "text", "text": "First <paragraph>.\n\nSecond."},
-        "pvr": {"title": "Table", "kind": "table", "path": str(results / "tables" / "paper_vs_reproduced.csv"),
-                "highlight": {"column": "within_10pct", "equals": "False"}},
-        "gone": {"title": "Missing", "kind": "figure", "path": str(tmp_path / "nope.png")},
-        "fig": {"title": "A figure", "kind": "figure", "path": str(results / "figures" / "fig08.png"),
-                "caption": "My caption."},
-    }
-    out = report.build_report(tmp_path / "r" / "index.html", sections, None)
-    page = out.read_text()
-    assert re.findall(r'<section id="([^"]+)"', page) == ["intro", "pvr", "fig"]
-    assert "<p>First &lt;paragraph&gt;.</p><p>Second.</p>" in page
-    assert "My caption." in page and "provenance" not in page
-    with pytest.raises(ValueError, match="kind"):
-        report.build_report(tmp_path / "x.html", [{"id": "a", "kind": "movie"}], None)
+def test_only_figures_and_tables_and_nothing_half_written(tmp_path, results):
+    (tmp_path / "notes.txt").write_text("x")
+    sections = [{"path": str(tmp_path / "notes.txt"), "title": "Notes", "category": "1", "caption_html": ""}]
+    with pytest.raises(ValueError, match="figures .* and tables"):
+        report.build_report(tmp_path / "x.html", sections, None, TEMPLATE)
     assert not (tmp_path / "x.html").exists()
-
-
-def test_snakemake_captions_exist_for_every_default_caption():
-    folder = ROOT / "workflow" / "report"
-    names = list(report.CAPTIONS) + ["paper_vs_reproduced", "tmd_optimum", "masri_check", "coexistence",
-                                     "coexistence_figure", "hysteresis_figure", "workflow", "figure"]
-    for name in names:
-        assert (folder / f"{name}.rst").stat().st_size > 100, name
-    # the figure rule's caption (one rule, a {fig} wildcard) includes each paper figure's own file
-    dispatch = (folder / "figure.rst").read_text()
-    for name in report.CAPTIONS:
-        if name.startswith("fig"):
-            assert f'"{name}"' in dispatch
-    assert {report.snakemake_category(n) for n in ("fig08", "fig09", "fig10")} == {"5. Parametric study"}
-    assert report.snakemake_category("fig11") == "6. Comparison of CID, PID and TMD"
-    assert report.snakemake_subcategory("hysteresis_cid_mu0.01_e0.25") == "Hysteresis"
+    twice = [{"path": str(results / "figures" / "fig08.png"), "title": t, "category": "1", "caption_html": ""}
+             for t in ("a", "b")]
+    with pytest.raises(ValueError, match="used twice"):
+        report.build_report(tmp_path / "x.html", twice, None, TEMPLATE)
+    out = report.build_report(tmp_path / "r" / "index.html", twice[:1], None, TEMPLATE)
+    assert "provenance" not in out.read_text() and "<h1>Impact dampers: the reproduced study</h1>" in out.read_text()
 
 
 # --------------------------------------------------------------------------- headless Chromium
@@ -309,7 +331,7 @@ def test_report_loads_in_headless_chromium_without_errors(results, tmp_path):
     assert m, f"self-test did not run:\n{proc.stdout[-2000:]}\n{proc.stderr[-2000:]}"
     result = json.loads(html.unescape(m.group(1)))
     assert result["errors"] == []
-    assert result["title"] == "Impact dampers: the reproduced study"
+    assert result["title"] == "Impact dampers for civil structures: a reproducible study"
     assert result["sections"] == 8
     assert len(result["images"]) == n_figures == 3
     for img in result["images"]:
@@ -353,33 +375,28 @@ class _Named(dict):
             raise AttributeError(key) from None
 
 
-def test_snakemake_script_entry_uses_only_declared_inputs(results):
+def test_snakemake_script_entry_shows_the_registry_sections(results):
     from types import SimpleNamespace
 
+    entries = _entries(results)[:2]
     smk = SimpleNamespace(
-        input=_Named(shown=[str(results / "tables" / "paper_vs_reproduced.csv"), str(results / "figures" / "fig08.png"),
-                            str(results / "figures" / "fig08.pdf")],
+        input=_Named(shown=[e["path"] for e in entries], overview=str(REPORT / "workflow.rst"), template=str(TEMPLATE),
                      benchmarks=[str(results / "benchmarks" / "figure" / "fig08.tsv")],
                      library=["src/impact/report.py"]),
         output=[str(results / "report" / "index.html")],
-        params=_Named(), resources=_Named(executor="slurm"), config=CONFIG)
+        params=_Named(sections=entries), resources=_Named(executor="slurm"), config=CONFIG)
     page = report.snakemake_main(smk).read_text()
-    # masri_check.csv etc. exist but are not inputs of the rule: left out
-    assert re.findall(r'<section id="([^"]+)"', page) == ["overview", "paper_vs_reproduced", "fig08", "provenance"]
-    assert "<th scope=\"row\">executor</th><td>slurm</td>" in page
+    # masri_check.csv etc. exist but are not in the registry's sections: left out
+    assert re.findall(r'<section id="([^"]+)"', page) == ["overview", "tmd_optimum", "fig08", "provenance"]
+    assert '<th scope="row">executor</th><td>slurm</td>' in page
     assert "1 job, 3.1 s of wall time in total" in page
 
 
-def test_long_tables_fold_and_other_figures_get_captions(tmp_path, results):
+def test_long_tables_fold(tmp_path, results):
     rows = [[str(i), "True" if i % 3 else "False"] for i in range(report.LONG_TABLE + 1)]
     _csv(tmp_path / "long.csv", ["i", "ok"], rows)
-    shutil.copy(results / "figures" / "fig99.png", results / "figures" / "coexistence_cid_mu0.01_e0.25.png")
-    sections = report.standard_sections(results, tables=[tmp_path / "long.csv"])
-    ids = [s["id"] for s in sections]
-    assert ids.index("coexistence_cid_mu0.01_e0.25") > ids.index("masri_check")  # grouped by topic
-    assert ids[-1] == "long"
-    page, shown = report.render_report(sections, None)
-    assert shown == ids
+    sections = [{"path": str(tmp_path / "long.csv"), "title": "Long", "category": "1", "caption_html": ""}]
+    page, shown = report.render_report(sections, None, TEMPLATE)
+    assert shown == ["long"]
     assert f"<details><summary>All {report.LONG_TABLE + 1} rows</summary>" in page
     assert f"{report.LONG_TABLE + 1} rows; ok: 40 of 61 true" in page
-    assert "Coexisting steady states of cid_mu0.01_e0.25: X_m against g" in page

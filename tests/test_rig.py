@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 from scipy import integrate
 
+from impact.experiment import grid as G
+from impact.experiment import model as M
 from impact.experiment import rig as R
-from impact.experiment import validation as V
 from impact.experiment.analysis import drop_test_restitution, restitution_from_drop
 from impact.experiment.records import load_record, write_record
 
@@ -62,15 +63,15 @@ def _linear_reference(spec: R.RigSpec, r: float, ts: np.ndarray) -> np.ndarray:
 
 def test_tiny_amplitudes_point_mass_rig_matches_eq4_model():
     """Small angles, no contact, point mass: the nonlinear rig reduces to Eq. (4) exactly."""
-    cfg = V.validation_config({"excitation": {"force_ratio_mm": 1e-4}})
-    case = V.Case(0.0252, 40.0, 1.0, "steel")
+    cfg = G.validation_config({"excitation": {"force_ratio_mm": 1e-4}})
+    case = G.Case(0.0252, 40.0, 1.0, "steel")
     spec = R.rig_spec(cfg, mu=case.mu, gap_mm=case.gap_mm, rp=case.rp, wall=case.wall,
                       finite_radius=False, sensor=False)
     assert spec.nonlinear  # the full large-angle equations
     ts = np.arange(0, 3001) / 100.0
     for r in (0.93, 1.0, 1.06):
         raw = R.run(spec, r, ts[-1], ts)
-        model = V._run_model(cfg, case, r, ts, forced=True)
+        model = M._run_model(cfg, case, r, ts, forced=True)
         scale = np.max(np.abs(model.x_mm))
         assert raw.n_episodes == 0
         assert np.max(np.abs(raw.x * 1e3 - model.x_mm)) < 2e-6 * scale
@@ -78,7 +79,7 @@ def test_tiny_amplitudes_point_mass_rig_matches_eq4_model():
 
 
 def test_tiny_amplitudes_compound_pendulum_matches_its_linearisation():
-    cfg = V.validation_config({"excitation": {"force_ratio_mm": 1e-4}})
+    cfg = G.validation_config({"excitation": {"force_ratio_mm": 1e-4}})
     spec = R.rig_spec(cfg, mu=0.0252, gap_mm=40.0, rp=0.9, wall="steel", sensor=False)
     assert spec.I_c > 0 and spec.pendulum_hz == pytest.approx(0.9 * 1.5, rel=1e-12)
     ts = np.arange(0, 2001) / 100.0

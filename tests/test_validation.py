@@ -8,6 +8,9 @@ import math
 import numpy as np
 import pytest
 
+from impact.experiment import comparison as C
+from impact.experiment import grid as G
+from impact.experiment import model as M
 from impact.experiment import rig as R
 from impact.experiment import validation as V
 from impact.experiment.analysis import sweep_curve
@@ -25,26 +28,26 @@ SHORT = {
                 "fig5b": {"mu": 0.0054, "gap_mm": 20.0, "rp": 1.0, "wall": "rubber_1.0mm", "extra_r": [0.968]}},
 }
 ALL_OFF = {"nonlinear_pendulum": False, "finite_radius": False, "stiffness_scale": 1.0e4, "sensor": False}
-IMPACTING = V.Case(0.0054, 20.0, 1.0, "cork_3.0mm")  # regular 2 impacts per cycle near r = 0.99
+IMPACTING = G.Case(0.0054, 20.0, 1.0, "cork_3.0mm")  # regular 2 impacts per cycle near r = 0.99
 
 
 @pytest.fixture(scope="module")
 def cfg():
     R.warm_up()
-    return V.validation_config(SHORT)
+    return G.validation_config(SHORT)
 
 
 def test_grid_has_the_papers_108_cases():
-    cases = V.all_cases(None)
+    cases = G.all_cases(None)
     assert len(cases) == 108 and len({c.id for c in cases}) == 108
-    assert V.Case.of(cases[5].id) == cases[5]
-    assert V.frequency_values({"min": 0.9, "max": 1.1, "step": 0.01}).size == 21
+    assert G.Case.of(cases[5].id) == cases[5]
+    assert G.frequency_values({"min": 0.9, "max": 1.1, "step": 0.01}).size == 21
 
 
 def test_model_records_rebuilt_from_events_equal_the_kernel_sample_by_sample(cfg):
     ts = np.arange(3000, 4001) / 100.0
-    dense = V._run_model(cfg, IMPACTING, 0.99, ts, forced=True)
-    stepwise = V._run_model(cfg, IMPACTING, 0.99, ts, forced=True, chunk=1)
+    dense = M._run_model(cfg, IMPACTING, 0.99, ts, forced=True)
+    stepwise = M._run_model(cfg, IMPACTING, 0.99, ts, forced=True, chunk=1)
     assert dense.impact_times_s.size > 20  # 2 impacts per cycle
     np.testing.assert_allclose(dense.x_mm, stepwise.x_mm, rtol=0, atol=1e-9)
     np.testing.assert_allclose(dense.s_mm, stepwise.s_mm, rtol=0, atol=1e-9)
@@ -53,9 +56,9 @@ def test_model_records_rebuilt_from_events_equal_the_kernel_sample_by_sample(cfg
 def test_model_record_amplitude_matches_the_production_protocol(cfg):
     """At r = 1 the forcing and natural periods coincide: the record's sqrt(2) RMS over the
     window equals the simulator's exactly integrated protocol amplitude (no detrending there)."""
-    rec, _ = V.model_forced_point(cfg, IMPACTING, 1.0)
+    rec, _ = M.model_forced_point(cfg, IMPACTING, 1.0)
     assert rec.synthetic and rec.header["source"].startswith("model")
-    exact = simulate(V.model_system(cfg, IMPACTING), 1.0, Protocol(periods=60, average_from=30))
+    exact = simulate(M.model_system(cfg, IMPACTING), 1.0, Protocol(periods=60, average_from=30))
     amp = sweep_curve([rec]).amplitude[0]
     assert exact.diagnostics["impacts_in_window"] > 20
     assert amp == pytest.approx(exact.amplitude, rel=2e-3)
@@ -65,20 +68,20 @@ def test_detect_beating():
     t = np.arange(0, 100, 0.01)
     steady = 2.0 * np.sin(2 * np.pi * 1.5 * t)
     beat = steady + 0.8 * np.sin(2 * np.pi * 1.55 * t)
-    assert not V.detect_beating(t, steady, 1.5).beating
-    b = V.detect_beating(t, beat, 1.5)
+    assert not C.detect_beating(t, steady, 1.5).beating
+    b = C.detect_beating(t, beat, 1.5)
     assert b.beating and b.modulation == pytest.approx(0.8 / 2.0, rel=0.05)
     assert b.beat_period_s == pytest.approx(20.0, rel=0.15)
     # a monotone transient is not beating
     decay = np.exp(-0.02 * t) * steady
-    assert not V.detect_beating(t, decay, 1.5).beating
+    assert not C.detect_beating(t, decay, 1.5).beating
 
 
 def test_peak_of_sdof_curve():
     beta = 0.02
     r = np.round(np.arange(0.9, 1.1001, 0.01), 10)
     amp = 1 / np.sqrt((1 - r**2) ** 2 + (2 * beta * r) ** 2)
-    xm, rk, rp = V.peak_of_curve(r, amp)
+    xm, rk, rp = C.peak_of_curve(r, amp)
     assert rk == 0.99 or rk == 1.0
     assert rp == pytest.approx(math.sqrt(1 - 2 * beta**2), abs=1e-9)
 
@@ -86,7 +89,7 @@ def test_peak_of_sdof_curve():
 def test_near_linear_rig_agrees_with_the_model(cfg):
     """Rig features off (linear point-mass pendulum, 10^4 x stiffer contact, ideal sensor):
     only the contact's finite duration remains; with impacts the errors are small."""
-    res = V.run_case(cfg, IMPACTING, fidelity=ALL_OFF, r_values=[0.97, 0.99, 1.01])
+    res = C.run_case(cfg, IMPACTING, fidelity=ALL_OFF, r_values=[0.97, 0.99, 1.01])
     row = res.row
     assert row["model_aipc_true_at_max"] == pytest.approx(2.0, abs=0.05)
     for key in ("err_xmax_rel", "err_r_peak", "err_curve_rms_rel", "err_delta_rms"):
@@ -99,17 +102,17 @@ def test_near_linear_rig_agrees_with_the_model(cfg):
 
 
 def test_full_rig_case_errors_are_finite_and_moderate(cfg):
-    res = V.run_case(cfg, V.Case(0.0054, 40.0, 1.1, "steel"))
+    res = C.run_case(cfg, G.Case(0.0054, 40.0, 1.1, "steel"))
     row = res.row
     for key in ("err_xmax_rel", "err_r_peak", "err_curve_rms_rel", "err_delta_rms", "err_delta_rel"):
         assert math.isfinite(row[key]), key
     assert abs(row["err_xmax_rel"]) < 0.05
     assert row["err_delta_rel"] < 0.1
-    assert {c["r"] for c in res.curve} == set(V.frequency_values(cfg["protocol"]["freq"]).tolist())
+    assert {c["r"] for c in res.curve} == set(G.frequency_values(cfg["protocol"]["freq"]).tolist())
 
 
 def test_run_validation_smoke_writes_everything(cfg, tmp_path):
-    table = V.run_validation(SHORT, tmp_path, cases=[V.Case(0.0054, 20.0, 1.0, "steel")], processes=1)
+    table = V.run_validation(SHORT, tmp_path, cases=[G.Case(0.0054, 20.0, 1.0, "steel")], processes=1)
     assert len(table) == 1
     for name in ("validation_table.csv", "validation_curves.csv", "validation_delta.csv", "drop_tests.csv",
                  "claims.json", "fig3.png", "fig3.pdf", "fig5.png", "fig5.pdf", "fig4_histories.png",
@@ -130,11 +133,11 @@ def test_run_validation_smoke_writes_everything(cfg, tmp_path):
 
 def test_config_is_checked_and_the_shipped_yaml_matches_the_defaults():
     with pytest.raises(ValueError, match="unknown key"):
-        V.validation_config({"protocl": {}})
+        G.validation_config({"protocl": {}})
     with pytest.raises(ValueError, match="sensor"):
-        V.validation_config({"sensor": {"nosie_mm": 0.1}})
+        G.validation_config({"sensor": {"nosie_mm": 0.1}})
     with pytest.raises(ValueError, match="grid wall"):
-        V.validation_config({"grid": {"walls": ["glass"]}})
+        G.validation_config({"grid": {"walls": ["glass"]}})
     from pathlib import Path
 
     import yaml
@@ -142,5 +145,5 @@ def test_config_is_checked_and_the_shipped_yaml_matches_the_defaults():
     path = Path(__file__).resolve().parents[1] / "config" / "validation.yaml"
     if not path.exists():
         pytest.skip("config/validation.yaml not present")
-    cfg = V.validation_config(yaml.safe_load(path.read_text()))
-    assert cfg["grid"] and len(V.all_cases(cfg)) == 108
+    cfg = G.validation_config(yaml.safe_load(path.read_text()))
+    assert cfg["grid"] and len(G.all_cases(cfg)) == 108

@@ -60,8 +60,8 @@ rule coexistence_figure:
         png=report(
             "results/figures/coexistence_{curve}.png",
             caption="../report/coexistence_figure.rst",
-            category=snakemake_category("coexistence_"),
-            subcategory=snakemake_subcategory("coexistence_"),
+            category=SECTIONS["coexistence"],
+            subcategory="Coexisting states of {curve}",
         ),
         pdf="results/figures/coexistence_{curve}.pdf",
     log:
@@ -91,8 +91,8 @@ rule hysteresis_figure:
         png=report(
             "results/figures/hysteresis_{curve}.png",
             caption="../report/hysteresis_figure.rst",
-            category=snakemake_category("hysteresis_"),
-            subcategory=snakemake_subcategory("hysteresis_"),
+            category=SECTIONS["coexistence"],
+            subcategory="Hysteresis of {curve}",
         ),
         pdf="results/figures/hysteresis_{curve}.pdf",
     log:
@@ -127,10 +127,15 @@ rule coexistence_table:
         table=report(
             "results/tables/coexistence.csv",
             caption="../report/coexistence.rst",
-            category=snakemake_category("coexistence"),
-            subcategory=snakemake_subcategory("coexistence"),
+            category=SECTIONS["coexistence"],
+            subcategory="Coexisting steady states: table",
         ),
-        statement="results/tables/coexistence_e_trend.json",
+        statement=report(
+            "results/tables/coexistence_e_trend.json",
+            caption="../report/coexistence_e_trend.rst",
+            category=SECTIONS["coexistence"],
+            subcategory="The CID's e-trend across steady states",
+        ),
     log:
         "results/logs/coexistence_table.log",
     benchmark:

@@ -1,11 +1,16 @@
 # Shared helpers: the study's curves from the configuration, library sources
 # as rule inputs (Snakemake does not track what a script imports).
+import dataclasses
 import os
+
+import yaml
+from snakemake.utils import validate
 
 from impact import comparison
 from impact.archive import archive_name
+from impact.experiment.grid import SCHEMA_PATH as RIG_SCHEMA
+from impact.experiment.grid import study_cases, validation_config
 from impact.provenance import git_state
-from impact.report import snakemake_category, snakemake_subcategory
 from impact.study import all_curves, check_config, curve_id, figure_curves, friction_scale
 
 check_config(config)
@@ -14,6 +19,26 @@ FIGURES = list(config["figures"])
 CURVES = all_curves(config)
 
 ENV = "../envs/impact.yaml"
+# the workflow's description (the Snakefile's report:), beside every caption and the page template
+OVERVIEW = os.path.relpath(workflow.report_text.get_path_or_uri(secret_free=True))
+REPORT_DIR = os.path.dirname(OVERVIEW)
+
+# The report's sections, in order: the category of every report() flag, so that
+# Snakemake's report (which sorts them by name) and the HTML page agree.
+SECTIONS = {
+    "paper": "1. The paper's values beside ours",
+    "figures": "2. The paper's figures",
+    "experiment": "3. Experiment (cross-validation)",
+    "masri": "4. Closed form (Masri, 2 EIPC)",
+    "coexistence": "5. Initial conditions and coexisting states",
+    "numerics": "6. Numerics",
+}
+
+
+def figure_title(fig):
+    """A configured figure's title in the reports: its number and its title in the configuration."""
+    number, title = fig.removeprefix("fig").lstrip("0"), config["figures"][fig].get("title")
+    return f"Fig. {number}: {title}" if title else f"Fig. {number}"
 
 
 def library(*names):
@@ -40,6 +65,17 @@ LIB_SWEEP = LIB_CORE + library("dataset.py", "study.py")
 LIB_TMD = library("tmd.py", "pipeline.py", "io.py", "params.py")
 LIB_PLOT = library("plotting.py", "study.py", "pipeline.py", "io.py")
 LIB_TABLE = library("comparison.py", "study.py", "pipeline.py", "io.py")
+LIB_EXPERIMENT = (
+    LIB_CORE
+    + library("core/sampler.py", "experiment/rig.schema.yaml")
+    + library(
+        *(
+            f"experiment/{m}.py"
+            for m in ("__init__", "grid", "records", "analysis", "rig", "model", "comparison", "claims", "plotting")
+        )
+    )
+    + library("experiment/validation.py")
+)
 LIB_REPORT = library("report.py", "provenance.py", "pipeline.py", "io.py")
 LIB_ARCHIVE = library("archive.py", "report.py", "provenance.py", "pipeline.py", "io.py")
 
@@ -51,6 +87,16 @@ ARCHIVE = f"results/archive/{archive_name(git_state()['git_commit'], git_state()
 MASRI = "masri" in config
 NUMERICS = "numerics" in config
 VALIDATION = config.get("validation", {})
+# the synthetic experiment: the rig's file, validated against its schema (which fills in every
+# default), and the cases of its grid (the smoke subset when asked)
+RIG_FILE = VALIDATION.get("config", "config/validation.yaml")
+RIG, RIG_CASES = {}, {}
+if VALIDATION:
+    with open(RIG_FILE) as fh:
+        RIG = yaml.safe_load(fh) or {}
+    validate(RIG, str(RIG_SCHEMA))
+    RIG = validation_config(RIG, smoke=VALIDATION.get("smoke", False))
+    RIG_CASES = {c.id: dataclasses.asdict(c) for c in study_cases(RIG, VALIDATION.get("smoke", False))}
 COEXISTENCE_CURVES = config.get("coexistence", {}).get("curves", [])
 COEXISTENCE_MODES = config.get("coexistence", {}).get("modes", ["continuation_up", "continuation_down"])
 

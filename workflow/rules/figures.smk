@@ -10,8 +10,8 @@ rule figure:
         png=report(
             "results/figures/{fig}.png",
             caption="../report/figure.rst",
-            category=lambda wc: snakemake_category(wc.fig),
-            subcategory=lambda wc: snakemake_subcategory(wc.fig),
+            category=SECTIONS["figures"],
+            subcategory=lambda wc: figure_title(wc.fig),
         ),
         pdf="results/figures/{fig}.pdf",
     log:

@@ -10,10 +10,15 @@ rule masri_check:
         table=report(
             "results/tables/masri_check.csv",
             caption="../report/masri_check.rst",
-            category=snakemake_category("masri_check"),
-            subcategory=snakemake_subcategory("masri_check"),
+            category=SECTIONS["masri"],
+            subcategory="The simulator against the closed form, point by point",
         ),
-        summary="results/checks/masri_summary.json",
+        summary=report(
+            "results/checks/masri_summary.json",
+            caption="../report/masri_summary.rst",
+            category=SECTIONS["masri"],
+            subcategory="Summary of the closed-form check",
+        ),
     log:
         "results/logs/masri_check.log",
     benchmark:
@@ -88,15 +93,15 @@ rule masri_figures:
         chart_png=report(
             "results/figures/masri_stability.png",
             caption="../report/masri_stability.rst",
-            category=snakemake_category("masri_stability"),
-            subcategory=snakemake_subcategory("masri_stability"),
+            category=SECTIONS["masri"],
+            subcategory="Where the 2-EIPC orbit exists and is stable",
         ),
         chart_pdf="results/figures/masri_stability.pdf",
         branches_png=report(
             "results/figures/masri_branches.png",
             caption="../report/masri_branches.rst",
-            category=snakemake_category("masri_branches"),
-            subcategory=snakemake_subcategory("masri_branches"),
+            category=SECTIONS["masri"],
+            subcategory="Branches and runs from rest",
         ),
         branches_pdf="results/figures/masri_branches.pdf",
     log:

@@ -15,7 +15,12 @@ rule numerics_work_precision:
         ),
     output:
         dataset="results/numerics/work_precision.nc",
-        speed="results/tables/numerics_speed.csv",
+        speed=report(
+            "results/tables/numerics_speed.csv",
+            caption="../report/numerics_speed.rst",
+            category=SECTIONS["numerics"],
+            subcategory="Speed at equal error",
+        ),
     log:
         "results/logs/numerics_work_precision.log",
     benchmark:
@@ -47,7 +52,7 @@ rule numerics_stability:
         table=report(
             "results/tables/numerics_stability.csv",
             caption="../report/numerics_stability.rst",
-            category="Numerics",
+            category=SECTIONS["numerics"],
             subcategory="Stability on extreme cases",
         ),
     log:
@@ -75,11 +80,16 @@ rule numerics_figures:
         work_png=report(
             "results/figures/numerics_error_runtime.png",
             caption="../report/numerics_error_runtime.rst",
-            category="Numerics",
+            category=SECTIONS["numerics"],
             subcategory="Error against run time",
         ),
         work_pdf="results/figures/numerics_error_runtime.pdf",
-        map_png="results/figures/numerics_stability_map.png",
+        map_png=report(
+            "results/figures/numerics_stability_map.png",
+            caption="../report/numerics_stability_map.rst",
+            category=SECTIONS["numerics"],
+            subcategory="Stability map",
+        ),
         map_pdf="results/figures/numerics_stability_map.pdf",
     log:
         "results/logs/numerics_figures.log",

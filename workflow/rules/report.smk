@@ -3,9 +3,12 @@
 
 rule report:
     input:
-        # what the registry says the report shows (targets.smk), and every registered job's run time:
-        # a job that reruns updates its benchmark, and the report follows
-        shown=lambda wildcards: report_inputs(),
+        # what the registry says the report shows (targets.smk), their captions and every registered
+        # job's run time: a job that reruns updates its benchmark, and the report follows
+        shown=lambda wildcards: [entry["path"] for entry in report_sections()],
+        captions=report_captions(),
+        overview=OVERVIEW,
+        template=os.path.join(REPORT_DIR, "index.html.j2"),
         benchmarks=lambda wildcards: study_benchmarks(),
         library=LIB_REPORT,
     output:
@@ -21,6 +24,8 @@ rule report:
         mem_mb=1000,
         # a resource, not a param: shown in the report, but another executor reruns nothing
         executor=executor_name,
+    params:
+        sections=lambda wildcards: report_sections(),
     script:
         "../scripts/build_report.py"
 

@@ -10,8 +10,8 @@ rule paper_vs_reproduced:
         report(
             "results/tables/paper_vs_reproduced.csv",
             caption="../report/paper_vs_reproduced.rst",
-            category=snakemake_category("paper_vs_reproduced"),
-            subcategory=snakemake_subcategory("paper_vs_reproduced"),
+            category=SECTIONS["paper"],
+            subcategory="The paper's reported values beside ours",
         ),
     log:
         "results/logs/paper_vs_reproduced.log",

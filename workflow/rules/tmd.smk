@@ -8,8 +8,8 @@ rule tmd_optimum:
         report(
             "results/tables/tmd_optimum.json",
             caption="../report/tmd_optimum.rst",
-            category=snakemake_category("tmd_optimum"),
-            subcategory=snakemake_subcategory("tmd_optimum"),
+            category=SECTIONS["figures"],
+            subcategory="The optimum tuned mass damper (Fig. 11's reference)",
         ),
     log:
         "results/logs/tmd_optimum.log",

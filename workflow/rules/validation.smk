@@ -1,43 +1,208 @@
-# Cross-validation against the experiment (Figs. 3-5): the model of Eq. 4 and a
+# Cross-validation against the experiment (Figs. 3-5): the model of Eq. 4 against a
 # higher-fidelity virtual test rig, through the same analysis code as real records.
+# One job per case of the paper's grid, then the grid's tables, the drop tests, the
+# data of Figs. 3 and 5, the claims and the figures.  Everything here is synthetic.
 
 
-rule cross_validation:
+rule validation_case:
     input:
-        rig_config=VALIDATION.get("config", "config/validation.yaml"),
-        library=LIB_CORE
-        + library("core/sampler.py")
-        + library(*(f"experiment/{m}.py" for m in ("__init__", "records", "analysis", "rig", "validation"))),
+        rig_config=RIG_FILE,
+        library=LIB_EXPERIMENT,
+    output:
+        "results/validation/cases/{case}.json",
+    log:
+        "results/logs/validation_case/{case}.log",
+    benchmark:
+        "results/benchmarks/validation_case/{case}.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=10,
+        mem_mb=1000,
+    params:
+        rig=RIG,
+        case=lambda wc: RIG_CASES[wc.case],
+    script:
+        "../scripts/validation_case.py"
+
+
+rule validation_grid:
+    input:
+        cases=expand(rules.validation_case.output[0], case=list(RIG_CASES)),
+        library=library("experiment/validation.py", "io.py", "pipeline.py"),
     output:
         table=report(
             "results/validation/validation_table.csv",
             caption="../report/cross_validation.rst",
-            category="3. Experiment (cross-validation)",
+            category=SECTIONS["experiment"],
             subcategory="Model against the virtual rig",
         ),
         curves="results/validation/validation_curves.csv",
         delta="results/validation/validation_delta.csv",
-        drop_tests="results/validation/drop_tests.csv",
-        claims="results/validation/claims.json",
-        fig3="results/validation/fig3.png",
-        fig3_pdf="results/validation/fig3.pdf",
-        fig5="results/validation/fig5.png",
-        fig5_pdf="results/validation/fig5.pdf",
     log:
-        "results/logs/cross_validation.log",
+        "results/logs/validation_grid.log",
     benchmark:
-        "results/benchmarks/cross_validation.tsv"
+        "results/benchmarks/validation_grid.tsv"
     conda:
         ENV
-    threads: VALIDATION.get("threads", 2)
+    threads: 1
     resources:
-        runtime=30,
-        mem_mb=2000,
+        runtime=5,
+        mem_mb=1000,
+    script:
+        "../scripts/validation_grid.py"
+
+
+rule validation_drop_tests:
+    input:
+        rig_config=RIG_FILE,
+        library=LIB_EXPERIMENT,
+    output:
+        table="results/validation/drop_tests.csv",
+        records=directory("results/validation/records/drop_tests"),
+    log:
+        "results/logs/validation_drop_tests.log",
+    benchmark:
+        "results/benchmarks/validation_drop_tests.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=5,
+        mem_mb=1000,
     params:
+        rig=RIG,
+    script:
+        "../scripts/validation_drop_tests.py"
+
+
+rule validation_fig3_data:
+    input:
+        rig_config=RIG_FILE,
+        library=LIB_EXPERIMENT,
+    output:
+        data="results/validation/fig3_data.json",
+        decay="results/validation/fig3a_decay.csv",
+        sweep="results/validation/fig3b_sweep.csv",
+        fig3a=directory("results/validation/records/fig3a"),
+        fig3b_paper_grid=directory("results/validation/records/fig3b_paper_grid"),
+        fig3b_fine_grid=directory("results/validation/records/fig3b_fine_grid"),
+    log:
+        "results/logs/validation_fig3_data.log",
+    benchmark:
+        "results/benchmarks/validation_fig3_data.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=10,
+        mem_mb=1000,
+    params:
+        rig=RIG,
+    script:
+        "../scripts/validation_figure_data.py"
+
+
+rule validation_fig5_data:
+    input:
+        rig_config=RIG_FILE,
+        library=LIB_EXPERIMENT,
+    output:
+        data="results/validation/fig5_data.json",
+        decay="results/validation/fig5a_decay.csv",
+        sweep="results/validation/fig5b_sweep.csv",
+        fig5a_pid=directory("results/validation/records/fig5a_pid"),
+        fig5a_bare=directory("results/validation/records/fig5a_bare"),
+        fig5b=directory("results/validation/records/fig5b"),
+    log:
+        "results/logs/validation_fig5_data.log",
+    benchmark:
+        "results/benchmarks/validation_fig5_data.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=10,
+        mem_mb=1000,
+    params:
+        rig=RIG,
+    script:
+        "../scripts/validation_figure_data.py"
+
+
+rule validation_claims:
+    input:
+        table=rules.validation_grid.output.table,
+        curves=rules.validation_grid.output.curves,
+        fig3=rules.validation_fig3_data.output.data,
+        fig5=rules.validation_fig5_data.output.data,
+        drop_tests=rules.validation_drop_tests.output.table,
+        library=LIB_EXPERIMENT,
+    output:
+        report(
+            "results/validation/claims.json",
+            caption="../report/validation_claims.rst",
+            category=SECTIONS["experiment"],
+            subcategory="The paper's Section 3 claims",
+        ),
+    log:
+        "results/logs/validation_claims.log",
+    benchmark:
+        "results/benchmarks/validation_claims.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=5,
+        mem_mb=1000,
+    params:
+        rig=RIG,
         smoke=VALIDATION.get("smoke", False),
     script:
-        "../scripts/cross_validation.py"
+        "../scripts/validation_claims.py"
+
+
+rule validation_figures:
+    input:
+        fig3=rules.validation_fig3_data.output.data,
+        fig5=rules.validation_fig5_data.output.data,
+        library=LIB_EXPERIMENT + library("plotting.py"),
+    output:
+        fig3=report(
+            "results/validation/fig3.png",
+            caption="../report/validation_fig3.rst",
+            category=SECTIONS["experiment"],
+            subcategory="Fig. 3: the bare structure",
+        ),
+        fig3_pdf="results/validation/fig3.pdf",
+        fig5=report(
+            "results/validation/fig5.png",
+            caption="../report/validation_fig5.rst",
+            category=SECTIONS["experiment"],
+            subcategory="Fig. 5: the PID",
+        ),
+        fig5_pdf="results/validation/fig5.pdf",
+        histories="results/validation/fig4_histories.png",
+    log:
+        "results/logs/validation_figures.log",
+    benchmark:
+        "results/benchmarks/validation_figures.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=5,
+        mem_mb=1000,
+    script:
+        "../scripts/validation_figures.py"
 
 
 if VALIDATION:
-    register(rules.cross_validation, report=("table", "claims", "fig3", "fig5"))
+    register(rules.validation_case, case=list(RIG_CASES))
+    register(rules.validation_grid, report=("table",))
+    register(rules.validation_drop_tests)
+    register(rules.validation_fig3_data)
+    register(rules.validation_fig5_data)
+    register(rules.validation_claims, report=(0,))
+    register(rules.validation_figures, report=("fig3", "fig5"))

@@ -4,7 +4,7 @@ Everything this module produces is **synthetic** (``synthetic: true`` and a
 ``virtual rig`` provenance in every record header).  It is not the paper's
 data -- those records are not public -- but a second, more detailed model of
 the same stand, used to cross-validate the paper's Eq. (4) model
-(:mod:`impact.experiment.validation`).
+(:mod:`impact.experiment.comparison`).
 
 What the rig models beyond Eq. (4)
 ----------------------------------
@@ -75,7 +75,6 @@ Units: the kernel works in SI (m, s, kg, N); records are written in mm.
 
 from __future__ import annotations
 
-import copy
 import functools
 import math
 from dataclasses import asdict, dataclass, replace
@@ -85,107 +84,15 @@ import numpy as np
 from numba import njit
 from scipy import integrate, optimize
 
+from .grid import validation_config
 from .records import Record, make_record
 
 G_STANDARD = 9.80665
 RIG_SOURCE = "virtual rig (impact.experiment.rig): synthetic, simulated -- not measured data"
 
-# ----------------------------------------------------------------------------
-# default configuration (the YAML of config/validation.yaml mirrors this)
-# ----------------------------------------------------------------------------
-
-DEFAULT_CONFIG: dict[str, Any] = {
-    "structure": {
-        "frequency_hz": 1.5,       # natural frequency of the bare structure
-        "beta": 0.00048,           # damping ratio (half-power, paper); delta = 0.003
-        "mass_kg": 20.4,           # M; paper: "M = 20.4 kg" (from mu and the balls)
-    },
-    "balls": {
-        "density_kg_m3": 7850.0,
-        "diameters_mm": [30.0, 40.0, 50.0],
-        "mu": [0.0054, 0.0129, 0.0252],   # the paper's stated mass ratios, same order
-        # 'mu': ball mass m = mu * M (model and rig share mu exactly);
-        # 'density': m = rho * pi D^3 / 6 (then m/M differs from the stated mu by < 1 %)
-        "mass_from": "mu",
-        "youngs_modulus_pa": 2.1e11,
-        "poisson": 0.3,
-    },
-    "pendulum": {
-        "rp": [0.9, 1.0, 1.1],
-        "length_rule": "compound",   # or 'point_mass'
-        "g": G_STANDARD,
-    },
-    "gaps_mm": [20.0, 30.0, 40.0],
-    "walls": {
-        "steel": {"e": 0.37, "law": "hertz", "youngs_modulus_pa": 2.1e11, "poisson": 0.3},
-        "rubber_1.0mm": {"e": 0.46, "law": "layer", "thickness_mm": 1.0, "layer_modulus_pa": 2.0e7},
-        "rubber_0.5mm": {"e": 0.58, "law": "layer", "thickness_mm": 0.5, "layer_modulus_pa": 2.0e7},
-        "cork_3.0mm": {"e": 0.64, "law": "layer", "thickness_mm": 3.0, "layer_modulus_pa": 2.0e7},
-    },
-    "contact": {
-        "v_floor_m_s": 1.0e-3,        # floor of v_in in the Hunt-Crossley damping term
-        "stiffness_scale": 1.0,       # multiplies every wall stiffness (sensitivity / ablation)
-    },
-    "excitation": {
-        # F0/K.  With the PID the responses must stay inside the sensor's +-20 mm
-        # while the ball reaches the walls: 0.06 mm (A_max = 62.5 mm, g = d/A_max =
-        # 0.32 ... 0.64) keeps x_max <= ~15 mm over the grid.  The bare structure is
-        # excited less (validation: bare.force_ratio_mm = 0.0168, A_max = 17.5 mm).
-        "force_ratio_mm": 0.06,
-        "phase": 0.0,
-    },
-    "sensor": {
-        "range_mm": 20.0,        # "displacements up to 2 cm": read as +-20 mm, clipped beyond
-        "noise_mm": 0.01,        # white, rms (the analysis' ASSUMED_SENSOR_NOISE_MM)
-        "sample_rate_hz": 100.0,
-    },
-    "fidelity": {                 # the rig's additions to Eq. (4); switch off one at a time
-        "nonlinear_pendulum": True,
-        "finite_radius": True,
-        "sensor": True,
-    },
-    "integrator": {
-        "rtol": 1.0e-9,
-        "atol_m": 1.0e-10,
-        "onset_tol_m": 1.0e-9,
-    },
-    "protocol": {                 # the paper's response protocol, natural periods of the structure
-        "periods": 500,
-        "average_from": 250,
-        "freq": {"min": 0.9, "max": 1.1, "step": 0.01},
-    },
-    "free_decay": {
-        "x0_mm": [10.0, 15.0, 20.0, 25.0],
-        "duration_s": 60.0,
-        "min_amplitude_mm": 2.0,  # cycles below this amplitude are not compared
-    },
-    "drop_test": {
-        "heights_cm": [25.0, 50.0, 100.0],
-        "target": "structure",    # free mass M = m/mu (Eq. 3b with mu), or 'rigid' (mu = 0)
-        "height_noise_cm": 0.0,   # rms reading error of the video heights
-    },
-    "seed": 1991,
-}
-
-
-def default_config() -> dict[str, Any]:
-    """A deep copy of :data:`DEFAULT_CONFIG`."""
-    return copy.deepcopy(DEFAULT_CONFIG)
-
-
 def merged_config(cfg: dict | None) -> dict[str, Any]:
-    """``cfg`` laid over the defaults (nested dicts merged, lists and scalars replaced)."""
-    out = default_config()
-
-    def merge(dst, src):
-        for key, val in (src or {}).items():
-            if isinstance(val, dict) and isinstance(dst.get(key), dict):
-                merge(dst[key], val)
-            else:
-                dst[key] = copy.deepcopy(val)
-
-    merge(out, cfg)
-    return out
+    """``cfg`` with every default filled in from the rig's schema (:mod:`.grid`, ``rig.schema.yaml``)."""
+    return validation_config(cfg)
 
 
 # ----------------------------------------------------------------------------

@@ -1,0 +1,6 @@
+"""Glue: the rig's configuration -> synthetic drop tests and e recovered by Eq. (3b)."""
+from impact.experiment.validation import write_drop_tests
+from impact.pipeline import logged
+
+with logged(snakemake.log[0]):
+    write_drop_tests(snakemake.params.rig, snakemake.output.table, snakemake.output.records)

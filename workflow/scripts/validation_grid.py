@@ -1,0 +1,8 @@
+"""Glue: every case's JSON -> the grid's tables (per case, per case and r, per amplitude bin)."""
+from impact.experiment.validation import write_grid_tables
+from impact.pipeline import logged
+
+with logged(snakemake.log[0]) as log:
+    out = snakemake.output
+    write_grid_tables(snakemake.input.cases, out.table, out.curves, out.delta)
+    log.info("%d cases", len(snakemake.input.cases))
