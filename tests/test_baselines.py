@@ -379,3 +379,65 @@ def test_stability_ok_means_finished_and_within_tolerance():
     assert judged.to_dict() == {("a", "core"): True, ("a", "close"): True, ("a", "sinks"): False,
                                 ("a", "off"): False, ("b", "core"): False, ("b", "close"): True,
                                 ("b", "broken"): False}
+
+
+TINY_STUDY = {"periods": 3, "repeats": 2, "ivp_methods": ["RK45"], "rtol": [1e-6], "steps_per_period": [100],
+              "stiffness": [1e4], "stability_periods": 2, "budget": 10}
+
+
+def test_a_baseline_over_budget_is_recorded_as_failed_too_slow():
+    from impact import numerics as N
+
+    tight = {**TINY_STUDY, "budget": 1e-4}  # no solve_ivp run of 2 periods finishes in 0.1 ms
+    runs = N.stability_runs(tight, families=["ivp"])
+    ivp = [m for m in N.stability_methods(tight) if m.startswith("ivp_")]
+    assert sorted(set(runs["method"])) == sorted(ivp) and len(runs) == len(ivp) * len(N.extreme_cases(tight))
+    assert runs["status"].str.startswith(f"failed: {N.TOO_SLOW}").all(), runs["status"].tolist()
+    assert not runs["finite"].any()
+    table = N.stability_table([runs, N.stability_runs(TINY_STUDY, families=["core"])], tight)
+    assert not table.loc[table["method"].isin(ivp), "ok"].any() and table.loc[table["method"] == "core", "ok"].any()
+    ds = N.work_precision(tight, cases=["pid_tuned"], families=["ivp"])
+    assert ds["failed"].sel(integrator="ivp_RK45", setting=0).item() == 1.0
+    assert N.TOO_SLOW in str(ds["status"].sel(integrator="ivp_RK45", setting=0).item())
+    assert np.isnan(ds["wall_time"].sel(integrator="ivp_RK45", setting=0).item())
+
+
+def test_a_run_over_a_second_is_timed_once_and_shorter_runs_keep_the_minimum(monkeypatch):
+    import time
+
+    from impact import numerics as N
+
+    calls = []
+
+    def run(seconds):
+        calls.append(seconds)
+        time.sleep(seconds)
+        return {"status": "ok"}
+
+    monkeypatch.setattr(N, "ONE_REPEAT_ABOVE", 0.05)
+    best, out = N.timed_repeats(lambda: run(0.06), 10.0, 3)
+    assert len(calls) == 1 and best >= 0.06 and out == {"status": "ok"}
+    calls.clear()
+    best, _ = N.timed_repeats(lambda: run(0.001), 10.0, 3)
+    assert len(calls) == 3 and best < 0.05
+
+
+def test_the_numerics_pieces_join_into_the_whole_study():
+    """Run as one piece per (case, family) or all at once, every number but the run times is the same."""
+    from impact import numerics as N
+
+    cases = ["cid_2eipc", "pid_tuned"]
+    whole = N.work_precision(TINY_STUDY, cases=cases)
+    pieces = [N.work_precision(TINY_STUDY, cases=[c], families=[f]) for c, f in N.work_precision_pieces(TINY_STUDY)
+              if c in cases]
+    joined = N.combine_work_precision(pieces, TINY_STUDY).sel(case=cases)
+    assert list(joined["integrator"].values) == list(whole["integrator"].values)
+    for name in ("impact_time_error", "velocity_error", "state_error", "amplitude_error", "impacts", "failed",
+                 "setting_value", "predictability_horizon"):
+        np.testing.assert_array_equal(joined[name].values, whole[name].values, err_msg=name)
+    assert (joined["status"].values == whole["status"].values).all()
+    assert joined.attrs["budget_seconds"] == 10 and "title" not in joined.attrs
+    runs = [N.stability_runs(TINY_STUDY, families=[f]) for f in N.stability_families(TINY_STUDY)]
+    table, one = N.stability_table(runs[::-1], TINY_STUDY), N.stability(TINY_STUDY)
+    columns = [c for c in one.columns if c != "wall_time"]
+    assert table[columns].equals(one[columns])

@@ -14,9 +14,12 @@ import json
 import os
 import tempfile
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import xarray as xr
+
+if TYPE_CHECKING:  # xarray only for the annotations: a job that writes no dataset does not import it
+    import xarray as xr
 
 CONVENTIONS = "CF-1.10"
 

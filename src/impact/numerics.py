@@ -4,7 +4,11 @@ Work-precision: every integrator (the exact core and the baselines of
 :mod:`impact.baselines`) runs the same cases over a ladder of its own setting
 (tolerance, step, contact stiffness); its errors are measured against the
 exact core, and its wall time is the minimum of several repeats after a
-warm-up.  For the irregular (chaotic) case the predictability horizon is
+warm-up (one timed run is enough for a run longer than a second).  Every run
+has a budget: over it, the run is recorded as failed, "too slow at this
+setting".  The work splits into one piece per case and method family
+(:data:`FAMILIES`), which the workflow runs as parallel jobs and
+:func:`combine_work_precision` joins.  For the irregular (chaotic) case the predictability horizon is
 measured first (runs perturbed at round-off diverge) and errors are compared
 only inside it.
 
@@ -30,6 +34,16 @@ from .params import Protocol, System, a_max
 from .simulate import simulate
 
 K_IMPACTS = 20
+# methods that differ only in a setting or a solver option run as one piece of work
+FAMILIES = ("core", "ivp", "rk4", "moreau_jean", "penalty")
+TOO_SLOW = "too slow at this setting"
+ONE_REPEAT_ABOVE = 1.0  # s: a run this long is timed once; shorter runs keep the minimum of the repeats
+DEFAULT_BUDGET = 10.0  # s per run (the configuration's numerics.budget)
+
+
+def family(method: str) -> str:
+    """The family of a method: ivp for every solve_ivp method, else the method itself."""
+    return "ivp" if method.startswith("ivp_") else method
 
 
 # --------------------------------------------------------------------------- cases and methods
@@ -93,20 +107,42 @@ def _on_alarm(signum, frame):
 
 
 def timed(fun, limit: float):
-    """(seconds, result or exception) of fun(), stopped after `limit` seconds (SIGALRM)."""
+    """(seconds, result or exception) of fun(), stopped after `limit` seconds (SIGALRM).
+
+    A run stopped by the limit gives a Timeout whose message is TOO_SLOW.  (The alarm reaches a
+    compiled kernel only when it returns to Python: a run inside one long numba call can overrun.)
+    """
     old = signal.signal(signal.SIGALRM, _on_alarm)
     signal.setitimer(signal.ITIMER_REAL, limit)
     t0 = time.perf_counter()
     try:
         out = fun()
     except Timeout:
-        out = Timeout(f"no result within {limit:g} s")
+        out = Timeout(f"{TOO_SLOW} (no result within the {limit:g} s budget)")
     except Exception as exc:  # a baseline that fails is a result, recorded below
         out = exc
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0.0)
         signal.signal(signal.SIGALRM, old)
     return time.perf_counter() - t0, out
+
+
+def timed_repeats(fun, limit: float, repeats: int):
+    """(best seconds, result or exception): the minimum of `repeats` runs, or of one if it takes over
+    ONE_REPEAT_ABOVE; the first failure ends it."""
+    best, out = math.inf, None
+    for _ in range(repeats):
+        seconds, got = timed(fun, limit)
+        if isinstance(got, Exception):
+            return seconds, got
+        best, out = min(best, seconds), got
+        if seconds > ONE_REPEAT_ABOVE:
+            break
+    return best, out
+
+
+def budget(cfg: dict) -> float:
+    return float(cfg.get("budget", DEFAULT_BUDGET))
 
 
 # --------------------------------------------------------------------------- error measures
@@ -145,18 +181,25 @@ def errors(run: dict, ref: dict, k: int = K_IMPACTS) -> dict:
 
 # --------------------------------------------------------------------------- work-precision
 
-def work_precision(cfg: dict, log=None) -> xr.Dataset:
-    cases = work_precision_cases(cfg)
+def work_precision(cfg: dict, cases=None, families=None, log=None) -> xr.Dataset:
+    """Every method of `families` (default: all) on `cases` (default: all), as a dataset.
+
+    Dimensions case x integrator x setting; the setting axis is as long as the longest ladder of
+    all methods, so that the pieces of one study join (:func:`combine_work_precision`).
+    """
+    all_cases = work_precision_cases(cfg)
+    cases = {name: all_cases[name] for name in (cases or all_cases)}
     ladders = method_ladders(cfg)
     nset = max(len(v[1]) for v in ladders.values())
-    methods = list(ladders)
+    methods = [m for m in ladders if families is None or family(m) in families]
     names = ("wall_time", "impact_time_error", "velocity_error", "state_error", "amplitude_error",
              "nfev", "impacts", "impacts_compared", "failed")
     data = {n: np.full((len(cases), len(methods), nset), np.nan) for n in names}
+    status = np.full((len(cases), len(methods), nset), "", dtype=object)
     setting_value = np.full((len(methods), nset), np.nan)
     horizon = {}
     repeats = int(cfg.get("repeats", 3))
-    limit = float(cfg.get("time_limit", 60.0))
+    limit = budget(cfg)
     for ic, (case, (system, r, start, periods)) in enumerate(cases.items()):
         t_end = 2 * math.pi * periods
         # compare only inside the predictability horizon: the irregular case, but
@@ -172,15 +215,11 @@ def work_precision(cfg: dict, log=None) -> xr.Dataset:
             for iset, setting in enumerate(ladders[method][1]):
                 setting_value[im, iset] = setting
                 run_method(method, setting, system, r, start, min(t_end, 2 * math.pi), 0.5)  # warm-up
-                best, out = math.inf, None
-                for _ in range(repeats):
-                    seconds, got = timed(lambda: run_method(method, setting, system, r, start, t_end, t_window), limit)
-                    if isinstance(got, Exception):
-                        out = got
-                        break
-                    best, out = min(best, seconds), got
+                best, out = timed_repeats(lambda: run_method(method, setting, system, r, start, t_end, t_window),
+                                          limit, repeats)
                 failed = isinstance(out, Exception) or out["status"] != "ok" or not np.isfinite(out["amplitude"])
                 data["failed"][ic, im, iset] = float(failed)
+                status[ic, im, iset] = _outcome(out)
                 if isinstance(out, Exception):
                     if log:
                         log.info("%s %s %g failed: %s", case, method, setting, out)
@@ -203,14 +242,40 @@ def work_precision(cfg: dict, log=None) -> xr.Dataset:
                             "integrator": ("integrator", methods, {"long_name": "integration method"}),
                             "setting": ("setting", np.arange(nset),
                                         {"units": "1", "long_name": "index of the method setting on its ladder"})})
+    ds["status"] = (dims, status.astype(str), {
+        "long_name": "outcome of the run: ok, the reason it failed, or empty past the end of a ladder"})
     ds["setting_value"] = (("integrator", "setting"), setting_value, {
         "units": "1", "long_name": "method setting: rtol, steps per natural period, or contact stiffness"})
     ds["setting_name"] = ("integrator", [ladders[m][0] for m in methods], {"long_name": "what the setting is"})
     ds["predictability_horizon"] = ("case", [horizon[c] for c in cases], {
         "units": "1", "long_name": "dimensionless time (Omega t) after which round-off-perturbed runs differ by 1e-3"})
     ds.attrs.update(reference="the exact event-driven core (impact.simulate)", k_impacts=K_IMPACTS,
-                    wall_time="minimum of repeats after a warm-up", repeats=repeats)
+                    wall_time=f"minimum of {repeats} repeats after a warm-up (one for a run over "
+                              f"{ONE_REPEAT_ABOVE:g} s)", repeats=repeats, budget_seconds=limit)
     return ds
+
+
+WORK_PRECISION_ATTRS = ("reference", "k_impacts", "wall_time", "repeats", "budget_seconds")
+
+
+def _outcome(out) -> str:
+    if isinstance(out, Exception):
+        return f"failed: {out}" if isinstance(out, Timeout) else f"failed: {type(out).__name__}: {str(out)[:120]}"
+    return "ok" if out["status"] == "ok" and np.isfinite(out["amplitude"]) else str(out["status"])
+
+
+def combine_work_precision(parts, cfg: dict) -> xr.Dataset:
+    """The pieces of one study (each some cases and some families) as one dataset, in the study's order."""
+    parts = list(parts)
+    ds = xr.merge(parts, compat="no_conflicts", join="outer", combine_attrs="override")
+    ds.attrs = {k: v for k, v in parts[0].attrs.items() if k in WORK_PRECISION_ATTRS}  # not a piece's provenance
+    return ds.reindex(case=list(work_precision_cases(cfg)), integrator=list(method_ladders(cfg)))
+
+
+def work_precision_pieces(cfg: dict) -> list[tuple[str, str]]:
+    """(case, family) of every piece of work of the study."""
+    families = {family(m) for m in method_ladders(cfg)}
+    return [(case, fam) for case in work_precision_cases(cfg) for fam in FAMILIES if fam in families]
 
 
 def speed_at_equal_error(ds: xr.Dataset, error: str = "amplitude_error") -> pd.DataFrame:
@@ -280,18 +345,19 @@ def stability_methods(cfg: dict) -> dict:
             "rk4": 200, "moreau_jean": 200, "penalty": 1e5} | cfg.get("stability_settings", {})
 
 
-def stability(cfg: dict, log=None) -> pd.DataFrame:
+def stability_runs(cfg: dict, families=None, log=None) -> pd.DataFrame:
+    """Every method of `families` (default: all) on every extreme case, one row per run, not yet judged."""
     periods = float(cfg.get("stability_periods", 50))
-    limit = float(cfg.get("time_limit", 60.0))
+    limit = budget(cfg)
     t_end = 2 * math.pi * periods
     rows = []
-    cases = extreme_cases(cfg)
-    for case, (system, r, start) in cases.items():
-        for method, setting in stability_methods(cfg).items():
+    methods = {m: v for m, v in stability_methods(cfg).items() if families is None or family(m) in families}
+    for case, (system, r, start) in extreme_cases(cfg).items():
+        for method, setting in methods.items():
             seconds, out = timed(lambda: run_method(method, setting, system, r, start, t_end, 0.5 * t_end), limit)
             row = {"case": case, "method": method, "setting": setting, "wall_time": seconds}
             if isinstance(out, Exception):
-                row.update(status=f"failed: {type(out).__name__}: {str(out)[:120]}", finite=False)
+                row.update(status=_outcome(out), finite=False)
             else:
                 state = np.asarray(out["final_state"], dtype=float)
                 finite = bool(np.all(np.isfinite(state)) and np.isfinite(out["amplitude"]))
@@ -303,7 +369,29 @@ def stability(cfg: dict, log=None) -> pd.DataFrame:
             if log:
                 log.info("%s %s: %s (%.2f s)", case, method, row["status"], seconds)
             rows.append(row)
-    return judge_stability(pd.DataFrame(rows), {case: system.gap for case, (system, _, _) in cases.items()})
+    return pd.DataFrame(rows)
+
+
+def stability_table(parts, cfg: dict) -> pd.DataFrame:
+    """The runs of every family, case by case in the study's order, judged (:func:`judge_stability`)."""
+    cases = extreme_cases(cfg)
+    order = {name: i for i, name in enumerate(cases)}
+    methods = {name: i for i, name in enumerate(stability_methods(cfg))}
+    runs = pd.concat(list(parts), ignore_index=True)
+    runs = runs.iloc[sorted(range(len(runs)), key=lambda i: (order[runs["case"].iloc[i]],
+                                                             methods[runs["method"].iloc[i]]))]
+    return judge_stability(runs.reset_index(drop=True), {case: system.gap for case, (system, _, _) in cases.items()})
+
+
+def stability(cfg: dict, log=None) -> pd.DataFrame:
+    """Every method on every extreme case, judged: the stability table in one piece."""
+    return stability_table([stability_runs(cfg, log=log)], cfg)
+
+
+def stability_families(cfg: dict) -> list[str]:
+    """The families of the stability table's methods, one piece of work each."""
+    present = {family(m) for m in stability_methods(cfg)}
+    return [fam for fam in FAMILIES if fam in present]
 
 
 # a run is ok when it finished with a finite state, kept out of the walls and agreed with the exact core
@@ -320,12 +408,15 @@ def judge_stability(table: pd.DataFrame, gaps: dict) -> pd.DataFrame:
     with: amplitude_error is NaN and only the penetration is judged.
     """
     table = table.copy()
+    for column in ("amplitude", "max_penetration"):  # absent when every run failed
+        if column not in table:
+            table[column] = np.nan
     core = table[table["method"] == "core"].set_index("case")["amplitude"]
-    pen = table.get("max_penetration", pd.Series(np.nan, index=table.index)).astype(float)
+    pen = table["max_penetration"].astype(float)
     gap = table["case"].map(gaps).astype(float)
     ratio = np.where(pen <= 0.0, 0.0, pen / gap.where(gap > 0.0, np.nan))
     table["penetration_over_gap"] = np.where(np.isnan(ratio) & (pen > 0.0), np.inf, ratio)
-    amp = table.get("amplitude", pd.Series(np.nan, index=table.index)).astype(float)
+    amp = table["amplitude"].astype(float)
     ref = table["case"].map(core).astype(float)
     table["amplitude_error"] = (amp - ref).abs() / ref.abs()
     finished = (table["status"] == "ok") & table["finite"].fillna(False).astype(bool)

@@ -234,6 +234,8 @@ def plot_work_precision(ds, footer: str, outputs, error: str = "amplitude_error"
 
 def plot_stability_map(table, outputs) -> None:
     """Heat map case x method: ok (finished within tolerance), finished outside it, or failed (annotated)."""
+    from .numerics import TOO_SLOW
+
     cases = list(dict.fromkeys(table["case"]))
     methods = list(dict.fromkeys(table["method"]))
     grid = np.zeros((len(cases), len(methods)))
@@ -244,7 +246,8 @@ def plot_stability_map(table, outputs) -> None:
         grid[i, j] = 2 if failed else (0 if row["ok"] else 1)
         pen = row.get("max_penetration", np.nan)
         if failed or not (np.isfinite(pen) and pen > 0):
-            label = "failed" if failed else ("ok" if row["ok"] else "amplitude off")
+            label = ("too slow" if TOO_SLOW in str(row["status"]) else "failed") if failed else (
+                "ok" if row["ok"] else "amplitude off")
         else:
             label = f"pen {pen:.0e}"
         ax.text(j, i, label, ha="center", va="center", fontsize=6)

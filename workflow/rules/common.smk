@@ -10,6 +10,7 @@ from impact import comparison
 from impact.archive import archive_name
 from impact.experiment.grid import SCHEMA_PATH as RIG_SCHEMA
 from impact.experiment.grid import study_cases, validation_config
+from impact.numerics import stability_families, work_precision_pieces
 from impact.provenance import git_state
 from impact.study import all_curves, check_config, curve_id, figure_curves, friction_scale
 
@@ -65,6 +66,15 @@ LIB_SWEEP = LIB_CORE + library("dataset.py", "study.py")
 LIB_TMD = library("tmd.py", "pipeline.py", "io.py", "params.py")
 LIB_PLOT = library("plotting.py", "study.py", "pipeline.py", "io.py")
 LIB_TABLE = library("comparison.py", "study.py", "pipeline.py", "io.py")
+LIB_NUMERICS = LIB_CORE + library(
+    "numerics.py",
+    "baselines/__init__.py",
+    "baselines/_common.py",
+    "baselines/ivp.py",
+    "baselines/fixed_step.py",
+    "baselines/moreau.py",
+    "baselines/penalty.py",
+)
 LIB_EXPERIMENT = (
     LIB_CORE
     + library("core/sampler.py", "experiment/rig.schema.yaml")
@@ -87,6 +97,10 @@ ARCHIVE = f"results/archive/{archive_name(git_state()['git_commit'], git_state()
 MASRI = "masri" in config
 NUMERICS = "numerics" in config
 VALIDATION = config.get("validation", {})
+# the numerics' pieces of work: (case, method family) of the work-precision runs, families of the extreme cases
+NUMERICS_PIECES = work_precision_pieces(config["numerics"]) if NUMERICS else []
+STABILITY_FAMILIES = stability_families(config["numerics"]) if NUMERICS else []
+
 # the synthetic experiment: the rig's file, validated against its schema (which fills in every
 # default), and the cases of its grid (the smoke subset when asked)
 RIG_FILE = VALIDATION.get("config", "config/validation.yaml")

@@ -1,18 +1,37 @@
 # Numerics shown, not assumed: every integrator's error against its run time,
-# and stability on stiff and extreme cases.
+# and stability on stiff and extreme cases.  One job per (case, method family)
+# for the work-precision runs and one per family for the extreme cases, each run
+# within the configured budget; then the dataset, the tables and the figures.
+
+
+rule numerics_work_precision_piece:
+    input:
+        library=LIB_NUMERICS,
+    output:
+        "results/numerics/work_precision/{case}/{family}.nc",
+    log:
+        "results/logs/numerics_work_precision/{case}/{family}.log",
+    benchmark:
+        "results/benchmarks/numerics_work_precision/{case}/{family}.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=30,
+        mem_mb=2000,
+    params:
+        numerics=config.get("numerics", {}),
+    script:
+        "../scripts/numerics_work_precision_piece.py"
 
 
 rule numerics_work_precision:
     input:
-        library=LIB_CORE
-        + library(
-            "numerics.py",
-            "baselines/__init__.py",
-            "baselines/ivp.py",
-            "baselines/fixed_step.py",
-            "baselines/moreau.py",
-            "baselines/penalty.py",
-        ),
+        pieces=[
+            expand(rules.numerics_work_precision_piece.output[0], case=case, family=fam)[0]
+            for case, fam in NUMERICS_PIECES
+        ],
+        library=LIB_NUMERICS,
     output:
         dataset="results/numerics/work_precision.nc",
         speed=report(
@@ -29,7 +48,7 @@ rule numerics_work_precision:
         ENV
     threads: 1
     resources:
-        runtime=60,
+        runtime=5,
         mem_mb=2000,
     params:
         numerics=config.get("numerics", {}),
@@ -37,17 +56,31 @@ rule numerics_work_precision:
         "../scripts/numerics_work_precision.py"
 
 
+rule numerics_stability_piece:
+    input:
+        library=LIB_NUMERICS,
+    output:
+        "results/numerics/stability/{family}.csv",
+    log:
+        "results/logs/numerics_stability/{family}.log",
+    benchmark:
+        "results/benchmarks/numerics_stability/{family}.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=30,
+        mem_mb=2000,
+    params:
+        numerics=config.get("numerics", {}),
+    script:
+        "../scripts/numerics_stability_piece.py"
+
+
 rule numerics_stability:
     input:
-        library=LIB_CORE
-        + library(
-            "numerics.py",
-            "baselines/__init__.py",
-            "baselines/ivp.py",
-            "baselines/fixed_step.py",
-            "baselines/moreau.py",
-            "baselines/penalty.py",
-        ),
+        pieces=expand(rules.numerics_stability_piece.output[0], family=STABILITY_FAMILIES),
+        library=LIB_NUMERICS,
     output:
         table=report(
             "results/tables/numerics_stability.csv",
@@ -63,7 +96,7 @@ rule numerics_stability:
         ENV
     threads: 1
     resources:
-        runtime=60,
+        runtime=5,
         mem_mb=2000,
     params:
         numerics=config.get("numerics", {}),
@@ -106,6 +139,9 @@ rule numerics_figures:
 
 
 if NUMERICS:
+    for case, fam in NUMERICS_PIECES:
+        register(rules.numerics_work_precision_piece, case=[case], family=[fam])
+    register(rules.numerics_stability_piece, family=STABILITY_FAMILIES)
     register(rules.numerics_work_precision, report=("speed",))
     register(rules.numerics_stability, report=("table",))
     register(rules.numerics_figures, report=("map_png", "work_png"))

@@ -1,12 +1,15 @@
-"""Glue: every integrator on the work-precision cases -> dataset and the speed-at-equal-error table."""
+"""Glue: the pieces (case x method family) -> the work-precision dataset and the speed-at-equal-error table."""
+import xarray as xr
+
 from impact.io import write_csv_atomic, write_dataset
-from impact.numerics import speed_at_equal_error, work_precision
+from impact.numerics import combine_work_precision, speed_at_equal_error
 from impact.pipeline import logged
-from impact.provenance import attributes, package_versions
+from impact.provenance import package_versions
 
 with logged(snakemake.log[0]) as log:
-    ds = work_precision(snakemake.params.numerics, log=log)
+    ds = combine_work_precision([xr.load_dataset(p) for p in snakemake.input.pieces], snakemake.params.numerics)
     ds.attrs.update(title="Error against run time of the exact core and the baseline integrators",
-                    Conventions="CF-1.10", packages=str(package_versions()), **attributes())
+                    packages=str(package_versions()))
     write_dataset(ds, snakemake.output.dataset)
     write_csv_atomic(snakemake.output.speed, speed_at_equal_error(ds))
+    log.info("%d pieces joined", len(snakemake.input.pieces))

@@ -1,0 +1,8 @@
+"""Glue: one method family on every extreme case -> its rows of the stability table (not yet judged)."""
+from impact.io import write_csv_atomic
+from impact.numerics import stability_runs
+from impact.pipeline import logged
+
+with logged(snakemake.log[0]) as log:
+    runs = stability_runs(snakemake.params.numerics, families=[snakemake.wildcards.family], log=log)
+    write_csv_atomic(snakemake.output[0], runs)
