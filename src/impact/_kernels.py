@@ -38,6 +38,7 @@ from numba import njit
 
 from .core.events import first_exit
 from .core.jitcache import purge_stale_cache
+from .core.segment import kappa_powers
 
 NT = 7  # coefficient slots, see module docstring
 
@@ -91,12 +92,18 @@ def _bound(kap, c, n):
 @njit(cache=True)
 def _state(kap, cx, cy, py1, py2, tau, z):
     """Write (x, x', y, y') at tau into z."""
+    _state_from(kap, np.exp(kap * tau), cx, cy, py1, py2, tau, z)
+
+
+@njit(cache=True)
+def _state_from(kap, eh, cx, cy, py1, py2, tau, z):
+    """_state with eh = exp(kap tau) given: the segment's own exponentials."""
     x = 0.0
     v = 0.0
     y = 0.0
     w = 0.0
     for k in range(NT):
-        ek = np.exp(kap[k] * tau)
+        ek = eh[k]
         a = cx[k] * ek
         b = cy[k] * ek
         x += a.real
@@ -214,6 +221,44 @@ def _build_combined(kap, cx, cy, poly, z0, t0, p, offset):
 # ----------------------------------------------------------------------------
 # exact integrals over a segment
 # ----------------------------------------------------------------------------
+
+@njit(cache=True)
+def _halve(kap, c):
+    """Fold each mode of an exactly conjugate pair of kap into its first slot: Re(c_j e^{kap_j t}) +
+    Re(c_j+1 e^{conj(kap_j) t}) = Re((c_j + conj(c_j+1)) e^{kap_j t}), so a search on the row evaluates half
+    the exponentials.  (A pair that is not exactly conjugate is left as it is.)"""
+    for j in range(NT - 1):
+        if kap[j].imag != 0.0 and kap[j + 1] == kap[j].conjugate() and (c[j + 1].real != 0.0
+                                                                        or c[j + 1].imag != 0.0):
+            c[j] += c[j + 1].conjugate()
+            c[j + 1] = 0.0
+
+
+@njit(cache=True)
+def _int_prod0(kap, eh, ca, cb, h):
+    """_int_prod over [0, h] with eh = exp(kap h): the segment's own exponentials, none evaluated here."""
+    acc = 0.0
+    j = 0
+    while j < NT:
+        # a mode and its conjugate (next slot, conjugate coefficient) give conjugate sums: Re of one, twice
+        paired = j + 1 < NT and kap[j + 1] == kap[j].conjugate() and ca[j + 1] == ca[j].conjugate() \
+            and kap[j].imag != 0.0
+        if ca[j].real != 0.0 or ca[j].imag != 0.0:
+            row = 0.0 + 0.0j
+            for l in range(NT):
+                if cb[l].real == 0.0 and cb[l].imag == 0.0:
+                    continue
+                kk = kap[j] + kap[l]
+                zz = kk * h
+                if abs(zz) < 1e-3:
+                    phi1 = h * (1.0 + zz * (0.5 + zz * (1.0 / 6.0 + zz * (1.0 / 24.0 + zz / 120.0))))
+                else:
+                    phi1 = (eh[j] * eh[l] - 1.0) / kk
+                row += cb[l] * phi1
+            acc += (2.0 if paired else 1.0) * (ca[j] * row).real
+        j += 2 if paired else 1
+    return acc
+
 
 @njit(cache=True)
 def _int_prod(kap, ca, cb, a, b):
@@ -365,6 +410,9 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
     cv = np.zeros(NT, dtype=np.complex128)
     cq = np.zeros(NT, dtype=np.complex128)
     cf = np.zeros(NT, dtype=np.complex128)
+    eh = np.zeros(NT, dtype=np.complex128)  # exp(kap tau) of the segment
+    kpow = np.zeros((5, NT))
+    kap_powered = np.full(NT, np.nan + 0j)
     poly = np.zeros(2)
     pp = np.zeros(4)  # (0, p1, p2, 0): the polynomial part as the shared search takes it
     ev = np.zeros(4)
@@ -425,14 +473,18 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
                 continue
         for k in range(NT):
             cv[k] = cx[k] * kap[k]
+            if kap[k] != kap_powered[k]:  # a new contact mode: its |kap|^n for the search's bounds
+                kappa_powers(kap, kpow)
+                kap_powered[:] = kap
         # locate the next event: ev_kind 1 impact/release/floor exit, 2 sliding stops
         ev_kind = 1
         if mode == MODE_FREE:
             for k in range(NT):
                 cs[k] = cy[k] - cx[k]
+            _halve(kap, cs)
             delta = 1e-12 * (_bound(kap, cs, 0) + d)
             _poly4(pp, poly[0], poly[1])
-            first_exit(kap, cs, pp, -half, half, tau_max, escape, delta, ev)
+            first_exit(kap, kpow, cs, pp, -half, half, tau_max, escape, delta, ev)
             if fric is not None:
                 # sigma * s' > 0 while sliding; the slide ends where it reaches 0
                 for k in range(NT):
@@ -440,7 +492,7 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
                 cq[6] += sigma * poly[0]
                 dv = 1e-12 * (_bound(kap, cq, 0) + 2.0 * abs(poly[1]))
                 _poly4(pp, 2.0 * sigma * poly[1], 0.0)
-                first_exit(kap, cq, pp, 0.0, np.inf, min(ev[0], tau_max), escape_v, dv, ev2)
+                first_exit(kap, kpow, cq, pp, 0.0, np.inf, min(ev[0], tau_max), escape_v, dv, ev2)
                 diag[D_STEPS] += ev2[3]
                 if ev2[0] < ev[0]:
                     ev[0] = ev2[0]
@@ -449,6 +501,7 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
         elif mode == MODE_STUCK:
             for k in range(NT):
                 cq[k] = side * cx[k] * kap[k] * kap[k]
+            _halve(kap, cq)
             level = -p[P_WP] ** 2 * half + a_f
             delta = 1e-12 * (_bound(kap, cq, 0) + abs(level))
             # just stuck with the contact force at round-off from its limit: the
@@ -456,17 +509,18 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
             q0 = _deriv_at0(kap, cq, 0)
             esc = 1 if level - q0 < delta else 0
             _poly4(pp, 0.0, 0.0)
-            first_exit(kap, cq, pp, -np.inf, level, tau_max, esc, delta, ev)
+            first_exit(kap, kpow, cq, pp, -np.inf, level, tau_max, esc, delta, ev)
         elif mode == MODE_FLOOR:
             for k in range(NT):
                 cq[k] = cx[k] * kap[k] * kap[k]
+            _halve(kap, cq)
             delta = 1e-12 * (_bound(kap, cq, 0) + a_f)
             q0 = _deriv_at0(kap, cq, 0)
             esc = 0
             if a_f - abs(q0) < delta:
                 esc = 1 if q0 > 0.0 else -1
             _poly4(pp, 0.0, 0.0)
-            first_exit(kap, cq, pp, -a_f, a_f, tau_max, esc, delta, ev)
+            first_exit(kap, kpow, cq, pp, -a_f, a_f, tau_max, esc, delta, ev)
         else:
             ev[0] = np.inf
             ev[1] = 0.0
@@ -479,14 +533,22 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
         theta0 = p[P_R] * t + p[P_PHI]
         cf[4] = p[P_F] * np.exp(1j * theta0) / 2j
         cf[5] = cf[4].conjugate()
-        diag[D_WORK] += _int_prod(kap, cf, cv, 0.0, tau)
-        diag[D_VISC] += 2.0 * p[P_BETA] * _int_prod(kap, cv, cv, 0.0, tau)
+        for k in range(NT):
+            if k > 0 and kap[k] == kap[k - 1].conjugate():
+                eh[k] = eh[k - 1].conjugate()  # exp(conj(z)) = conj(exp(z)): one exponential per pair
+            else:
+                eh[k] = np.exp(kap[k] * tau)
+        diag[D_WORK] += _int_prod0(kap, eh, cf, cv, tau)
+        diag[D_VISC] += 2.0 * p[P_BETA] * _int_prod0(kap, eh, cv, cv, tau)
         if t + tau > t_win:
-            diag[D_X2WIN] += _int_prod(kap, cx, cx, max(t_win - t, 0.0), tau)
+            if t >= t_win:
+                diag[D_X2WIN] += _int_prod0(kap, eh, cx, cx, tau)
+            else:
+                diag[D_X2WIN] += _int_prod(kap, cx, cx, t_win - t, tau)
         if mode != MODE_FREE:
             diag[D_STUCKTIME] += tau
         s_start = z[2] - z[0]
-        _state(kap, cx, cy, poly[0], poly[1], tau, z)
+        _state_from(kap, eh, cx, cy, poly[0], poly[1], tau, z)
         e_now = _energy(z, p)
         if e_now > diag[D_EMAX]:
             diag[D_EMAX] = e_now

@@ -1,11 +1,16 @@
 """Certified searches on one coefficient-form row: the first exit from a band, and the peak.
 
 On [a, b] a function with |h''| <= M2 stays within max(h(a), h(b)) + M2 (b-a)^2 / 8.
-The contact search accepts a step only when that bound keeps h inside its
-band, so a contact cannot be missed however briefly it lasts; a crossing is
-refined by safeguarded Newton once monotonicity is certified.  The same bound
-prunes the peak search: an interval whose bound cannot beat the running peak
-is dropped, and the others are split or searched for a zero of h'.
+The contact search accepts a step only when a bound of this kind keeps h inside
+its band, so a contact cannot be missed however briefly it lasts; a crossing is
+refined by safeguarded Newton once monotonicity is certified.  Three bounds
+certify a step, whichever holds: that one; h' of one sign (with |h'''| <= M3, h'
+stays within its end values widened by M3 (b-a)^2 / 8), so that h lies between
+its end values; and the cubic Hermite interpolant of h's values and slopes at
+both ends, within M4 (b-a)^4 / 384 of h.  The last two let one step span most
+of a flight between the walls.  The first bound also prunes the peak search: an
+interval whose bound cannot beat the running peak is dropped, and the others are
+split or searched for a zero of h'.
 """
 
 from __future__ import annotations
@@ -15,7 +20,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .segment import bound, bound_tab, deriv_at0, eval2, eval3
+from .segment import bound_tab, deriv_at0, eval2, eval3
 
 HMIN = 1e-12       # smallest step before a touch is declared tangential
 _EPS = 2.220446049250313e-16
@@ -24,13 +29,15 @@ PEAK_MAX_VISITS = 100000  # a function of pure round-off could split forever: gi
 
 
 @njit(cache=True)
-def refine(kap, c, p, level, side, a, b):
-    """Time of the crossing of `level` in [a, b], h monotone there.
+def refine(kap, c, p, level, side, a, b, ha, hb):
+    """Time of the crossing of `level` in [a, b], h monotone there, h(a) = ha and h(b) = hb.
 
-    g = side (h - level) has g(a) < 0 <= g(b).  Returns the bracket end with
-    g >= 0, so the state is at (never before) the crossing.
+    g = side (h - level) has g(a) < 0 <= g(b).  Newton starts where the chord meets the level.
+    Returns the bracket end with g >= 0, so the state is at (never before) the crossing.
     """
-    t = 0.5 * (a + b)
+    t = a + (b - a) * (level - ha) / (hb - ha) if hb != ha else 0.5 * (a + b)
+    if not a < t < b:
+        t = 0.5 * (a + b)
     for _ in range(200):
         h, dh = eval2(kap, c, p, t)
         g = side * (h - level)
@@ -65,7 +72,7 @@ def _escape_guess(h1, h2, h3, delta):
 
 
 @njit(cache=True)
-def _leave_boundary(kap, c, p, lo, hi, tau_max, escape, delta, out):
+def _leave_boundary(kap, kpow, c, p, lo, hi, tau_max, escape, delta, out):
     """Leave the band edge `escape` starts on; returns the clear time, or -1 with out filled.
 
     For the first tiny steps h(tau) - h(0) is round-off, so separation is
@@ -76,7 +83,7 @@ def _leave_boundary(kap, c, p, lo, hi, tau_max, escape, delta, out):
     h1 = deriv_at0(kap, c, p, 1)
     h2 = deriv_at0(kap, c, p, 2)
     h3 = deriv_at0(kap, c, p, 3)
-    m4 = bound(kap, c, p, 4, tau_max)
+    m4 = bound_tab(kpow, c, p, 4, tau_max)
     te = _escape_guess(h1, h2, h3, delta)
     last_clear = 0.0
     steps = 0.0
@@ -100,7 +107,8 @@ def _leave_boundary(kap, c, p, lo, hi, tau_max, escape, delta, out):
             elif escape * dhb > 0.0:
                 # back at the edge before separating by delta: a grazing contact
                 if last_clear > 0.0:
-                    te = refine(kap, c, p, edge, escape, last_clear, te)
+                    hl, _ = eval2(kap, c, p, last_clear)
+                    te = refine(kap, c, p, edge, escape, last_clear, te, hl, hb)
                 out[0] = te
                 out[1] = escape
                 out[2] += 1.0
@@ -111,42 +119,103 @@ def _leave_boundary(kap, c, p, lo, hi, tau_max, escape, delta, out):
     return te
 
 
+@njit(cache=True, inline='always')
+def _one_sign(d0, d1, m3, w):
+    """+1 / -1 when h' is certified positive / negative on an interval of width w with end slopes d0, d1."""
+    spread = m3 * w * w / 8.0
+    if min(d0, d1) - spread > 0.0:
+        return 1
+    if max(d0, d1) + spread < 0.0:
+        return -1
+    return 0
+
+
+@njit(cache=True, inline='always')
+def _hermite_inside(h0, d0, h1, d1, w, m4, lo, hi):
+    """h certified inside (lo, hi) on [0, w]: the cubic Hermite interpolant's extremes, widened by its error
+    bound m4 w^4 / 384 and by the round-off of forming it."""
+    slope = (h1 - h0) / w
+    c2 = (3.0 * slope - 2.0 * d0 - d1) / w
+    c3 = (d0 + d1 - 2.0 * slope) / (w * w)
+    top = max(h0, h1)
+    bot = min(h0, h1)
+    # interior extrema where H' = d0 + 2 c2 s + 3 c3 s^2 vanishes
+    qa = 3.0 * c3
+    qb = 2.0 * c2
+    s1 = -1.0
+    s2 = -1.0
+    if qa != 0.0:
+        disc = qb * qb - 4.0 * qa * d0
+        if disc >= 0.0:
+            root = math.sqrt(disc)
+            s1 = (-qb - root) / (2.0 * qa)
+            s2 = (-qb + root) / (2.0 * qa)
+    elif qb != 0.0:
+        s1 = -d0 / qb
+    for s in (s1, s2):
+        if 0.0 < s < w:
+            v = h0 + s * (d0 + s * (c2 + s * c3))
+            top = max(top, v)
+            bot = min(bot, v)
+    err = m4 * w * w * w * w / 384.0 + 16.0 * _EPS * (abs(h0) + abs(h1) + w * (abs(d0) + abs(d1)))
+    return top + err < hi and bot - err > lo
+
+
+@njit(cache=True, inline='always')
+def _step_guess(margin, dh, h, lo, hi, m2, m3, m4):
+    """A first step: the longest of the spans each certificate can be expected to accept, but no farther
+    than a little past where the slope would take h to the wall it heads for (there the step finds the
+    crossing with h monotone, ready to refine)."""
+    step = math.sqrt(4.0 * margin / m2) if m2 > 0.0 else np.inf
+    if m3 > 0.0:
+        step = max(step, 0.5 * math.sqrt(8.0 * abs(dh) / m3))
+    if m4 > 0.0:
+        step = max(step, (192.0 * margin / m4) ** 0.25)
+    if dh > 0.0 and hi < np.inf:
+        step = min(step, 1.2 * (hi - h) / dh)
+    elif dh < 0.0 and lo > -np.inf:
+        step = min(step, 1.2 * (h - lo) / -dh)
+    return max(step, HMIN)
+
+
 @njit(cache=True)
-def first_exit(kap, c, p, lo, hi, tau_max, escape, delta, out):
+def first_exit(kap, kpow, c, p, lo, hi, tau_max, escape, delta, out):
     """First tau in (0, tau_max] where h leaves (lo, hi).
 
     escape = +1/-1: h starts on hi/lo and is leaving it (after an impact or a
     release); re-contact closer than the contact tolerance `delta` is not
-    resolved.  Writes out[0] = tau (inf if none), out[1] = side (+1 hi, -1 lo,
-    0 none), out[2] = grazing passes, out[3] = steps taken.
+    resolved.  kpow: |kap|^n, n = 0..4 (segment.kappa_powers).  Writes out[0] = tau (inf if none),
+    out[1] = side (+1 hi, -1 lo, 0 none), out[2] = grazing passes, out[3] = steps taken.
     """
     out[2] = 0.0
     out[3] = 0.0
     a = 0.0
     if escape != 0:
-        a = _leave_boundary(kap, c, p, lo, hi, tau_max, escape, delta, out)
+        a = _leave_boundary(kap, kpow, c, p, lo, hi, tau_max, escape, delta, out)
         if a < 0.0:
             return
-    m2 = bound(kap, c, p, 2, tau_max)
+    m2 = bound_tab(kpow, c, p, 2, tau_max)
+    m3 = bound_tab(kpow, c, p, 3, tau_max)
+    m4 = bound_tab(kpow, c, p, 4, tau_max)
     steps = out[3]
     grazing = 0.0
     ha, dha = eval2(kap, c, p, a)
     near = False
     while a < tau_max:
         margin = max(min(hi - ha, ha - lo), 0.0)
-        hstep = math.sqrt(4.0 * margin / m2) if m2 > 0.0 else tau_max
-        hstep = max(hstep, HMIN)
+        hstep = _step_guess(margin, dha, ha, lo, hi, m2, m3, m4)
         while True:
             b = min(a + hstep, tau_max)
             w = b - a
             hb, dhb = eval2(kap, c, p, b)
             steps += 1.0
+            sign = _one_sign(dha, dhb, m3, w)
             if hb >= hi or hb <= lo:
                 side = 1.0 if hb >= hi else -1.0
-                monotone = side * dha - m2 * w > 0.0 or side * dhb - m2 * w > 0.0
+                monotone = side * dha - m2 * w > 0.0 or side * dhb - m2 * w > 0.0 or sign == side
                 if monotone or w <= HMIN:
                     level = hi if side > 0 else lo
-                    out[0] = refine(kap, c, p, level, side, a, b)
+                    out[0] = refine(kap, c, p, level, side, a, b, ha, hb)
                     out[1] = side
                     out[2] = grazing + (0.0 if monotone else 1.0)
                     out[3] = steps
@@ -155,6 +224,10 @@ def first_exit(kap, c, p, lo, hi, tau_max, escape, delta, out):
                 continue
             spread = m2 * w * w / 8.0
             if max(ha, hb) + spread < hi and min(ha, hb) - spread > lo:
+                break
+            if sign != 0 and lo <= ha <= hi:
+                break  # h monotone between two values inside the band
+            if _hermite_inside(ha, dha, hb, dhb, w, m4, lo, hi):
                 break
             if w <= HMIN:
                 break  # a tangency within round-off of the edge

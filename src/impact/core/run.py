@@ -218,7 +218,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
                 out[1] = 0.0
                 out[3] = 1.0
             else:
-                first_exit(kap, cs, ps, -half, half, best, escape[j], delta, out)
+                first_exit(kap, kpow, cs, ps, -half, half, best, escape[j], delta, out)
             diag[D_GRAZE] += out[2]
             diag[D_STEPS] += out[3]
             if out[0] <= best:
@@ -235,7 +235,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
                     for k in range(NPOLY):
                         pq[k] = sigma[j] * pq[k]
                     dv = _TOL * bound_tab(kpow, cq, pq, 0, 0.0)
-                    first_exit(kap, cq, pq, 0.0, np.inf, best, escape_v[j], dv, out)
+                    first_exit(kap, kpow, cq, pq, 0.0, np.inf, best, escape_v[j], dv, out)
                     diag[D_STEPS] += out[3]
                     if out[0] < best:
                         best = out[0]
@@ -249,7 +249,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
             delta = _TOL * bound_tab(kpow, cq, pq, 0, 0.0)
             q0 = deriv_at0(kap, cq, pq, 0)
             esc = 1 if -q0 < delta else 0
-            first_exit(kap, cq, pq, -np.inf, 0.0, best, esc, delta, out)
+            first_exit(kap, kpow, cq, pq, -np.inf, 0.0, best, esc, delta, out)
             diag[D_GRAZE] += out[2]
             diag[D_STEPS] += out[3]
             if out[0] <= best:
@@ -266,7 +266,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
                 esc = 0
                 if a_f - abs(q0) < delta:
                     esc = 1 if q0 > 0.0 else -1
-                first_exit(kap, cq, pq, -a_f, a_f, best, esc, delta, out)
+                first_exit(kap, kpow, cq, pq, -a_f, a_f, best, esc, delta, out)
                 diag[D_STEPS] += out[3]
                 if out[0] <= best:
                     best = out[0]

@@ -42,9 +42,13 @@ def eval2(kap, c, p, tau):
     for k in range(kap.shape[0]):
         ck = c[k]
         if ck.real != 0.0 or ck.imag != 0.0:
-            z = ck * np.exp(kap[k] * tau)
+            kk = kap[k]
+            if kk.real == 0.0 and kk.imag == 0.0:
+                h += ck.real  # a constant: exp(0) = 1 exactly, no exponential to evaluate
+                continue
+            z = ck * np.exp(kk * tau)
             h += z.real
-            dh += (z * kap[k]).real
+            dh += (z * kk).real
     # this order of sums, with p[0] and p[3] last, makes a row with p[0] = p[3] = 0 give the very bits
     # of the paper kernel's h + p1 tau + p2 tau^2: both kernels share this search and must not drift apart
     return (h + p[1] * tau + p[2] * tau * tau + p[0] + p[3] * tau * tau * tau,
