@@ -85,7 +85,15 @@ def _bound(kap, c, n):
     """Bound on |n-th derivative| of the exponential part for tau >= 0."""
     acc = 0.0
     for k in range(NT):
-        acc += abs(c[k]) * abs(kap[k]) ** n
+        ck = c[k]
+        if ck.real != 0.0 or ck.imag != 0.0:
+            term = math.sqrt(ck.real * ck.real + ck.imag * ck.imag)
+            if n > 0:
+                kk = kap[k]
+                size = math.sqrt(kk.real * kk.real + kk.imag * kk.imag)
+                for _ in range(n):
+                    term *= size
+            acc += term
     return acc
 
 
@@ -250,7 +258,7 @@ def _int_prod0(kap, eh, ca, cb, h):
                     continue
                 kk = kap[j] + kap[l]
                 zz = kk * h
-                if abs(zz) < 1e-3:
+                if zz.real * zz.real + zz.imag * zz.imag < 1e-6:  # |zz| < 1e-3
                     phi1 = h * (1.0 + zz * (0.5 + zz * (1.0 / 6.0 + zz * (1.0 / 24.0 + zz / 120.0))))
                 else:
                     phi1 = (eh[j] * eh[l] - 1.0) / kk

@@ -170,7 +170,7 @@ def _step_guess(margin, dh, h, lo, hi, m2, m3, m4):
     if m3 > 0.0:
         step = max(step, 0.5 * math.sqrt(8.0 * abs(dh) / m3))
     if m4 > 0.0:
-        step = max(step, (192.0 * margin / m4) ** 0.25)
+        step = max(step, math.sqrt(math.sqrt(192.0 * margin / m4)))
     if dh > 0.0 and hi < np.inf:
         step = min(step, 1.2 * (hi - h) / dh)
     elif dh < 0.0 and lo > -np.inf:
