@@ -24,7 +24,9 @@ def job_seconds(bench: Path) -> dict[str, list[float]]:
     """{rule: [seconds of each job]}, the mean of a job's repeats."""
     out: dict[str, list[float]] = defaultdict(list)
     for path in sorted(bench.rglob("*.tsv")):
-        rule = path.parent.name if path.parent != bench else path.stem
+        # benchmarks/<rule>.tsv, or benchmarks/<rule>/<wildcards...>.tsv (one folder level per wildcard)
+        parts = path.relative_to(bench).parts
+        rule = parts[0] if len(parts) > 1 else path.stem
         with open(path, newline="") as fh:
             values = [float(row["s"]) for row in csv.DictReader(fh, delimiter="\t") if row.get("s")]
         if values:

@@ -367,6 +367,23 @@ def make_result(log: ImpactLog, *, t_end_req: float, t_reached: float, t_window:
     )
 
 
+def start_mode(system: System, side: int, friction_accel: float) -> str:
+    """How a run starts: 'locked' (no gap), 'stick' (at a wall, or on a floor with friction) or 'free'."""
+    if system.gap == 0.0:
+        return "locked"
+    if side != 0 or friction_accel > 0.0:
+        return "stick"
+    return "free"
+
+
+def stick_from(system: System, seg, stuck: Affine, exits, t: float, z, s0: float, r: float, phase: float,
+               scale: float):
+    """The damper mass merged with the structure at offset s0 (momentum kept), then the stuck phase."""
+    vc = merged_velocity(system.mu, z[1], z[3])
+    z = np.array([z[0], vc, z[0] + s0, vc])
+    return stuck_phase(seg, stuck, exits, t, z, r, phase, scale)
+
+
 def stuck_phase(seg, stuck: Affine, exits, t: float, z, r: float, phase: float, scale: float):
     """Hold the masses together (affine flow `stuck`) until one of the exit functionals fires.
 

@@ -48,6 +48,7 @@ from ._common import (
     make_result,
     merged_velocity,
     rebound_negligible,
+    start_mode,
     stuck_affine,
     stuck_exit_functionals,
 )
@@ -225,12 +226,7 @@ def simulate_rk4(system: System, r: float, t_end: float, t_window: float, start:
     status = "ok"
     n_events = 0
     idle = 0
-    if system.gap == 0.0:
-        mode = ("locked",)
-    elif side != 0 or af > 0.0:
-        mode = ("stick", side)
-    else:
-        mode = ("free", 0.0)
+    mode = {"locked": ("locked",), "stick": ("stick", side), "free": ("free", 0.0)}[start_mode(system, side, af)]
     t_stop = t_end - 1e-12 * max(1.0, t_end)
     exits = None
 

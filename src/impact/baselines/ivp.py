@@ -67,9 +67,10 @@ from ._common import (
     merged_velocity,
     near_zero,
     rebound_negligible,
+    start_mode,
+    stick_from,
     stuck_affine,
     stuck_exit_functionals,
-    stuck_phase,
     wall_gap,
 )
 
@@ -326,12 +327,7 @@ def simulate_ivp(system: System, r: float, t_end: float, t_window: float, start:
     n_events = 0
     idle = 0
     # mode: ('free', sf, first_step) or ('stick', side)
-    if system.gap == 0.0:
-        mode = ("locked",)
-    elif side != 0 or af > 0.0:
-        mode = ("stick", side)
-    else:
-        mode = ("free", 0.0, None)
+    mode = {"locked": ("locked",), "stick": ("stick", side), "free": ("free", 0.0, None)}[start_mode(system, side, af)]
 
     while t < t_end and status == "ok":
         if mode[0] == "locked":
@@ -343,10 +339,8 @@ def simulate_ivp(system: System, r: float, t_end: float, t_window: float, start:
         if mode[0] == "stick":
             sd = mode[1]
             s0 = sd * half if sd else z[2] - z[0]
-            vc = merged_velocity(mu, z[1], z[3])
-            z = np.array([z[0], vc, z[0] + s0, vc])
             exits = stuck_exit_functionals(system, sd, s0)
-            t, z, released, msg, advanced = stuck_phase(seg, stuck, exits, t, z, r, ph, scale)
+            t, z, released, msg, advanced = stick_from(system, seg, stuck, exits, t, z, s0, r, ph, scale)
             if msg:
                 status = f"failed: {msg}"
                 break

@@ -27,8 +27,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from ..params import System
 from ._common import (
     S_VEL,
@@ -39,10 +37,9 @@ from ._common import (
     free_affine,
     initial_state,
     make_result,
-    merged_velocity,
+    stick_from,
     stuck_affine,
     stuck_exit_functionals,
-    stuck_phase,
     wall_gap,
 )
 from .ivp import MAX_IDLE_PHASES, Segments
@@ -115,10 +112,8 @@ def simulate_penalty(system: System, r: float, t_end: float, t_window: float, st
         if mode[0] == "stick":
             s0 = z[2] - z[0]
             cs = (1 if s0 > 0 else -1) if abs(s0) > half else 0
-            vc = merged_velocity(system.mu, z[1], z[3])
-            z = np.array([z[0], vc, z[0] + s0, vc])
             exits = stuck_exit_functionals(system, 0, s0, contact_of(cs))
-            t, z, released, msg, advanced = stuck_phase(seg, stuck, exits, t, z, r, ph, scale)
+            t, z, released, msg, advanced = stick_from(system, seg, stuck, exits, t, z, s0, r, ph, scale)
             if msg:
                 status = f"failed: {msg}"
                 break

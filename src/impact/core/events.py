@@ -29,6 +29,34 @@ PEAK_MAX_VISITS = 100000  # a function of pure round-off could split forever: gi
 
 
 @njit(cache=True)
+def _newton_in_bracket(kap, c, p, level, side, a, b, t, of_slope, iterations):
+    """Safeguarded Newton on g = side (f - level), f = h (or h' with of_slope), g(a) < 0 <= g(b).
+
+    Returns the last iterate and the bracket end with g >= 0.
+    """
+    for _ in range(iterations):
+        if of_slope:
+            _, f, df = eval3(kap, c, p, t)
+        else:
+            f, df = eval2(kap, c, p, t)
+        g = side * (f - level)
+        if g >= 0.0:
+            b = t
+        else:
+            a = t
+        if b - a <= 4.0 * _EPS * max(abs(b), 1e-300):
+            break
+        dg = side * df
+        tn = t - g / dg if dg != 0.0 else 0.5 * (a + b)
+        if not (a < tn < b):
+            tn = 0.5 * (a + b)
+        if tn == t:
+            break
+        t = tn
+    return t, b
+
+
+@njit(cache=True)
 def refine(kap, c, p, level, side, a, b, ha, hb):
     """Time of the crossing of `level` in [a, b], h monotone there, h(a) = ha and h(b) = hb.
 
@@ -38,23 +66,7 @@ def refine(kap, c, p, level, side, a, b, ha, hb):
     t = a + (b - a) * (level - ha) / (hb - ha) if hb != ha else 0.5 * (a + b)
     if not a < t < b:
         t = 0.5 * (a + b)
-    for _ in range(200):
-        h, dh = eval2(kap, c, p, t)
-        g = side * (h - level)
-        if g >= 0.0:
-            b = t
-        else:
-            a = t
-        if b - a <= 4.0 * _EPS * max(abs(b), 1e-300):
-            break
-        dg = side * dh
-        tn = t - g / dg if dg != 0.0 else 0.5 * (a + b)
-        if not (a < tn < b):
-            tn = 0.5 * (a + b)
-        if tn == t:
-            break
-        t = tn
-    return b
+    return _newton_in_bracket(kap, c, p, level, side, a, b, t, False, 200)[1]
 
 
 @njit(cache=True)
@@ -247,23 +259,9 @@ def first_exit(kap, kpow, c, p, lo, hi, tau_max, escape, delta, out):
 
 @njit(cache=True)
 def _zero_of_derivative(kap, c, p, a, b, da):
-    """A zero of h' in (a, b) where h' changes sign: safeguarded Newton on h'."""
-    t = 0.5 * (a + b)
-    for _ in range(100):
-        _, d, dd = eval3(kap, c, p, t)
-        if (d > 0.0) == (da > 0.0):
-            a = t
-        else:
-            b = t
-        if b - a <= 4.0 * _EPS * max(abs(b), 1e-300):
-            break
-        tn = t - d / dd if dd != 0.0 else 0.5 * (a + b)
-        if not (a < tn < b):
-            tn = 0.5 * (a + b)
-        if tn == t:
-            break
-        t = tn
-    return t
+    """A zero of h' in (a, b) where h' changes sign (h'(a) = da): safeguarded Newton on h'."""
+    side = -1.0 if da > 0.0 else 1.0  # g = side h' < 0 at a
+    return _newton_in_bracket(kap, c, p, 0.0, side, a, b, 0.5 * (a + b), True, 100)[0]
 
 
 @njit(cache=True)

@@ -123,18 +123,17 @@ def evaluate_claims(cfg: dict, table, curves, fig3: dict | None = None, fig5: di
     return jsonable(claims)
 
 
-def jsonable(obj):
+def jsonable(obj, *, keep_nan: bool = False):
+    """Numbers and arrays as JSON values; a non-finite float as null (strict JSON), or kept (keep_nan)."""
     if isinstance(obj, dict):
-        return {str(k): jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return [jsonable(v) for v in obj.tolist()]
-    if isinstance(obj, (np.bool_,)):
+        return {str(k): jsonable(v, keep_nan=keep_nan) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple, np.ndarray)):
+        return [jsonable(v, keep_nan=keep_nan) for v in (obj.tolist() if isinstance(obj, np.ndarray) else obj)]
+    if isinstance(obj, np.bool_):
         return bool(obj)
-    if isinstance(obj, (np.integer,)):
+    if isinstance(obj, np.integer):
         return int(obj)
     if isinstance(obj, (float, np.floating)):
         v = float(obj)
-        return v if math.isfinite(v) else None
+        return v if keep_nan or math.isfinite(v) else None
     return obj

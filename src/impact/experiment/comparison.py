@@ -67,15 +67,17 @@ from .records import Record
 # ----------------------------------------------------------------------------
 
 
-def rig_forced_point(cfg: dict, case: Case | None, r: float, *, fidelity: dict | None = None,
-                     settle_periods: float | None = None, record_periods: float | None = None) -> R.RigOutput:
+def _rig(cfg: dict, case: Case | None, fidelity: dict | None) -> tuple[R.RigSpec, str]:
+    """The rig of a case (None: the bare structure) and the case's name in the seeds."""
     fid = fidelity or {}
     if case is None:
-        spec = R.rig_spec(cfg, bare=True, **fid)
-        cid = "bare"
-    else:
-        spec = R.rig_spec(cfg, mu=case.mu, gap_mm=case.gap_mm, rp=case.rp, wall=case.wall, **fid)
-        cid = case.id
+        return R.rig_spec(cfg, bare=True, **fid), "bare"
+    return R.rig_spec(cfg, mu=case.mu, gap_mm=case.gap_mm, rp=case.rp, wall=case.wall, **fid), case.id
+
+
+def rig_forced_point(cfg: dict, case: Case | None, r: float, *, fidelity: dict | None = None,
+                     settle_periods: float | None = None, record_periods: float | None = None) -> R.RigOutput:
+    spec, cid = _rig(cfg, case, fidelity)
     prot = cfg["protocol"]
     if settle_periods is None:
         periods, avg = prot["periods"], prot["average_from"]
@@ -88,13 +90,7 @@ def rig_forced_point(cfg: dict, case: Case | None, r: float, *, fidelity: dict |
 
 def rig_free_decay(cfg: dict, case: Case | None, x0_mm: float, duration_s: float, *,
                    fidelity: dict | None = None) -> R.RigOutput:
-    fid = fidelity or {}
-    if case is None:
-        spec = R.rig_spec(cfg, bare=True, **fid)
-        cid = "bare"
-    else:
-        spec = R.rig_spec(cfg, mu=case.mu, gap_mm=case.gap_mm, rp=case.rp, wall=case.wall, **fid)
-        cid = case.id
+    spec, cid = _rig(cfg, case, fidelity)
     seed = R.seed_for(cid, "decay", float(x0_mm), base=cfg.get("seed", 0))
     return R.free_decay(spec, x0_mm, duration_s=duration_s, seed=seed,
                         wall_name=None if case is None else case.wall)

@@ -85,6 +85,29 @@ def _model_chunk_dense(p, z, code, pid, ta, tb, ts, i0, i1, xs, ss, rec, diag, z
 
 
 @njit(cache=True)
+def _advance(p, z, code, pid, ta, tb, rec, diag, zo):
+    """One kernel call from ta to tb, the state moved to tb; returns (contact code, capped)."""
+    p[K.P_T0] = ta
+    p[K.P_TEND] = tb
+    code = K.run(p, z, code, pid, None, rec, diag, zo)
+    capped = diag[K.D_CAP] > 0.0 or diag[K.D_TEND] < tb
+    for k in range(4):
+        z[k] = zo[k]
+    return code, capped
+
+
+@njit(cache=True)
+def _keep_impacts(rec, diag, imp, nimp):
+    """Append the call's impact records (time, wall) to imp while it has room; returns the new count."""
+    for j in range(int(diag[K.D_NREC])):
+        if nimp < imp.shape[0]:
+            imp[nimp, 0] = rec[j, 0]
+            imp[nimp, 1] = rec[j, 1]
+        nimp += 1
+    return nimp
+
+
+@njit(cache=True)
 def _model_samples(p, z0, code0, pid, t0, ts, xs, ss, imp, out, chunk):
     """Run the production kernel from t0 through the sample times ts (model units).
 
@@ -112,13 +135,9 @@ def _model_samples(p, z0, code0, pid, t0, ts, xs, ss, imp, out, chunk):
         i += 1
     if i < n and ts[i] > t:
         # settle: one call up to the first sample
-        p[K.P_T0] = t
-        p[K.P_TEND] = ts[i]
-        code = K.run(p, z, code, pid, None, rec, diag, zo)
-        if diag[K.D_CAP] > 0.0 or diag[K.D_TEND] < ts[i]:
+        code, capped = _advance(p, z, code, pid, t, ts[i], rec, diag, zo)
+        if capped:
             cap = 1.0
-        for k in range(4):
-            z[k] = zo[k]
         t = ts[i]
         xs[i] = z[0]
         ss[i] = z[2] - z[0]
@@ -128,12 +147,7 @@ def _model_samples(p, z0, code0, pid, t0, ts, xs, ss, imp, out, chunk):
         tb = ts[i1 - 1]
         code_new, ok = _model_chunk_dense(p, z, code, pid, t, tb, ts, i, i1, xs, ss, rec, diag, zo)
         if ok:
-            nr = int(diag[K.D_NREC])
-            for j in range(nr):
-                if nimp < imp.shape[0]:
-                    imp[nimp, 0] = rec[j, 0]
-                    imp[nimp, 1] = rec[j, 1]
-                nimp += 1
+            nimp = _keep_impacts(rec, diag, imp, nimp)
             code = code_new
             for k in range(4):
                 z[k] = zo[k]
@@ -142,19 +156,10 @@ def _model_samples(p, z0, code0, pid, t0, ts, xs, ss, imp, out, chunk):
             # sample by sample from the chunk's start
             for ii in range(i, i1):
                 if ts[ii] > t:
-                    p[K.P_T0] = t
-                    p[K.P_TEND] = ts[ii]
-                    code = K.run(p, z, code, pid, None, rec, diag, zo)
-                    nr = int(diag[K.D_NREC])
-                    for j in range(nr):
-                        if nimp < imp.shape[0]:
-                            imp[nimp, 0] = rec[j, 0]
-                            imp[nimp, 1] = rec[j, 1]
-                        nimp += 1
-                    if diag[K.D_CAP] > 0.0 or diag[K.D_TEND] < ts[ii]:
+                    code, capped = _advance(p, z, code, pid, t, ts[ii], rec, diag, zo)
+                    nimp = _keep_impacts(rec, diag, imp, nimp)
+                    if capped:
                         cap = 1.0
-                    for k in range(4):
-                        z[k] = zo[k]
                     t = ts[ii]
                 xs[ii] = z[0]
                 ss[ii] = z[2] - z[0]

@@ -5,6 +5,35 @@ from __future__ import annotations
 from pathlib import Path
 
 
+def _pyplot():
+    """matplotlib's pyplot on the file-only Agg backend (no display on a cluster node)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _sweep_axes(ax, title):
+    ax.set_xlabel("frequency ratio r")
+    ax.set_ylabel("√2·RMS amplitude [mm]")
+    ax.set_title(title)
+
+
+def _finish(fig, paths, axes=()) -> list[Path]:
+    """Legends and grids on `axes`, the synthetic-data note, then write every path and close."""
+    plt = _pyplot()
+    for ax in axes:
+        ax.legend(fontsize=7)
+        ax.grid(alpha=0.3)
+    fig.suptitle(SYNTH_NOTE, fontsize=8)
+    fig.tight_layout()
+    out = _save(fig, paths)
+    plt.close(fig)
+    return out
+
+
 def _save(fig, paths) -> list[Path]:
     from ..plotting import save_atomic
 
@@ -20,11 +49,7 @@ SYNTH_NOTE = "synthetic: virtual rig vs Eq. (4) model -- not the paper's measure
 
 def plot_fig3(data: dict, paths) -> list[Path]:
     """Fig. 3 analogue: (a) delta vs amplitude of the bare structure's free decays; (b) sweep + half-power."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = _pyplot()
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
     dec = data["decay"]
     rig = dec[dec.source == "rig"]
@@ -36,8 +61,6 @@ def plot_fig3(data: dict, paths) -> list[Path]:
     ax1.set_xlabel("displacement amplitude [mm]")
     ax1.set_ylabel("log decrement δ")
     ax1.set_title("(a) bare structure, free vibration")
-    ax1.legend(fontsize=7)
-    ax1.grid(alpha=0.3)
     sc = data["steady_curve"]
     ax2.plot(sc["r"], sc["amp_mm"], "-", color="k", lw=1, label="model, steady state")
     styles = {"paper_grid": ("o", "C1"), "fine_grid": (".", "C0")}
@@ -46,26 +69,14 @@ def plot_fig3(data: dict, paths) -> list[Path]:
         hp = sw["half_power"]["rig"]
         lab = f"rig, step {sw['step']:g}: " + (f"β_hp = {hp['beta']:.5f}" if hp["resolved"] else "β unresolved")
         ax2.plot(sw["r"], sw["rig_amp_mm"], m, ms=4, color=c, mfc="none", label=lab)
-    ax2.set_xlabel("frequency ratio r")
-    ax2.set_ylabel("√2·RMS amplitude [mm]")
-    ax2.set_title("(b) bare structure, forced vibration")
+    _sweep_axes(ax2, "(b) bare structure, forced vibration")
     ax2.set_xlim(0.97, 1.03)
-    ax2.legend(fontsize=7)
-    ax2.grid(alpha=0.3)
-    fig.suptitle(SYNTH_NOTE, fontsize=8)
-    fig.tight_layout()
-    out = _save(fig, paths)
-    plt.close(fig)
-    return out
+    return _finish(fig, paths, (ax1, ax2))
 
 
 def plot_fig5(data: dict, paths) -> list[Path]:
     """Fig. 5 analogue: (a) delta - delta_bare vs amplitude (steel walls); (b) sweep (1.0 mm rubber)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = _pyplot()
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
     a = data["a"]["data"]
     for who, m, c in (("rig", ".", "C0"), ("model", "x", "C3")):
@@ -79,8 +90,6 @@ def plot_fig5(data: dict, paths) -> list[Path]:
     ax1.set_xlabel("displacement amplitude [mm]")
     ax1.set_ylabel("δ − δ_bare")
     ax1.set_title(f"(a) free vibration, {data['a']['case']}")
-    ax1.legend(fontsize=7)
-    ax1.grid(alpha=0.3)
     b = data["b"]["data"].sort_values("r")
     ax2.plot(b.r, b.model_amp_mm, "-", color="C3", lw=1.2, label="model Eq. (4)")
     ax2.plot(b.r, b.rig_amp_mm, "o", ms=4, mfc="none", color="C0", label="virtual rig")
@@ -88,25 +97,13 @@ def plot_fig5(data: dict, paths) -> list[Path]:
     ax2.plot(b.r[beat], b.rig_amp_mm[beat], "o", ms=4, color="C0", label="rig record beats")
     for r_show in data["b"]["histories"]:
         ax2.axvline(r_show, color="0.7", ls=":", lw=1)
-    ax2.set_xlabel("frequency ratio r")
-    ax2.set_ylabel("√2·RMS amplitude [mm]")
-    ax2.set_title(f"(b) forced vibration, {data['b']['case']}")
-    ax2.legend(fontsize=7)
-    ax2.grid(alpha=0.3)
-    fig.suptitle(SYNTH_NOTE, fontsize=8)
-    fig.tight_layout()
-    out = _save(fig, paths)
-    plt.close(fig)
-    return out
+    _sweep_axes(ax2, f"(b) forced vibration, {data['b']['case']}")
+    return _finish(fig, paths, (ax1, ax2))
 
 
 def plot_histories(data: dict, paths) -> list[Path]:
     """Fig. 4 analogue: the rig's and the model's records at the Fig. 5(b) extra points."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = _pyplot()
     hist = data["b"]["histories"]
     n = max(len(hist), 1)
     fig, axes = plt.subplots(n, 1, figsize=(9, 2.2 * n), squeeze=False)
@@ -117,8 +114,4 @@ def plot_histories(data: dict, paths) -> list[Path]:
         ax.set_title(f"r = {r_show:g}", fontsize=9)
     axes[-1, 0].set_xlabel("t [s]")
     axes[0, 0].legend(fontsize=7, loc="upper right")
-    fig.suptitle(SYNTH_NOTE, fontsize=8)
-    fig.tight_layout()
-    out = _save(fig, paths)
-    plt.close(fig)
-    return out
+    return _finish(fig, paths)

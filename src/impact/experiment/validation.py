@@ -44,19 +44,7 @@ def _write_json(path, obj) -> None:
 
 def _plain(obj):
     """Numbers and arrays as JSON values, NaN kept."""
-    if isinstance(obj, dict):
-        return {str(k): _plain(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_plain(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _plain(obj.tolist())
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, np.floating):
-        return float(obj)
-    return obj
+    return jsonable(obj, keep_nan=True)
 
 
 def _write_records(folder: Path, recs: Iterable[Record]) -> None:
