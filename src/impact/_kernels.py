@@ -36,6 +36,7 @@ import math
 import numpy as np
 from numba import njit
 
+from .core.contact import slide_decision
 from .core.events import first_exit
 from .core.jitcache import purge_stale_cache
 from .core.segment import kappa_powers
@@ -360,26 +361,14 @@ def _stick(z, p, diag):
 
 @njit(cache=True)
 def _floor_decision(kap, cx, a_f):
-    """With friction, s' = 0 away from the walls: stick to the floor (0) or slide (sigma).
-
-    Sticking needs |x''| <= a_f for the combined body (the friction force that
-    drags the mass along is m x'').  If the structure accelerates harder to
-    the right the mass lags behind: it slides with s' < 0 (sigma = -1).
-    """
-    x2 = _deriv_at0(kap, cx, 2)
-    tol = 1e-10 * (_bound(kap, cx, 2) + a_f)
-    if x2 > a_f + tol:
-        return -1
-    if x2 < -a_f - tol:
-        return 1
-    if abs(x2) < a_f - tol:
-        return 0
-    sgn = 1 if x2 > 0.0 else -1
-    for n in range(3, 6):
-        qn = _deriv_at0(kap, cx, n)
-        if abs(qn) > 1e-10 * _bound(kap, cx, n):
-            return -sgn if sgn * qn > 0.0 else 0
-    return 0
+    """slide_decision for the paper's damper: the combined body's x'' against a_f (the friction force that
+    drags the mass along is m x'')."""
+    q = np.empty(4)
+    scale = np.empty(4)
+    for n in range(4):
+        q[n] = _deriv_at0(kap, cx, n + 2)
+        scale[n] = _bound(kap, cx, n + 2)
+    return slide_decision(q, scale, a_f, 1e-10)
 
 
 @njit(cache=True)

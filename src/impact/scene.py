@@ -92,6 +92,15 @@ class Harmonic:
         _check("phase", self.phase, -2 * math.pi, 2 * math.pi)
 
 
+def _samples(name: str, values, dt: float) -> np.ndarray:
+    """A record's samples as a finite 1-d float array of at least two, with a valid step dt."""
+    a = np.asarray(values, dtype=float)
+    if a.ndim != 1 or len(a) < 2 or not np.all(np.isfinite(a)):
+        raise ParameterError(f"{name} must be a finite 1-d array of at least two samples")
+    _check("dt", dt, 0.0, 1e3, lo_open=True)
+    return a
+
+
 @dataclass(frozen=True, eq=False)
 class GroundMotion:
     """A ground acceleration sampled every dt (m/s^2 in physical units), piecewise linear between samples."""
@@ -101,11 +110,7 @@ class GroundMotion:
     name: str = "record"
 
     def __post_init__(self):
-        a = np.asarray(self.accel, dtype=float)
-        if a.ndim != 1 or len(a) < 2 or not np.all(np.isfinite(a)):
-            raise ParameterError("accel must be a finite 1-d array of at least two samples")
-        _check("dt", self.dt, 0.0, 1e3, lo_open=True)
-        object.__setattr__(self, "accel", a)
+        object.__setattr__(self, "accel", _samples("accel", self.accel, self.dt))
 
     @classmethod
     def from_record(cls, record, pga_g: float | None = None, gravity: float = G_GRAV) -> "GroundMotion":
@@ -135,11 +140,7 @@ class ForceRecord:
     name: str = "force"
 
     def __post_init__(self):
-        v = np.asarray(self.values, dtype=float)
-        if v.ndim != 1 or len(v) < 2 or not np.all(np.isfinite(v)):
-            raise ParameterError("values must be a finite 1-d array of at least two samples")
-        _check("dt", self.dt, 0.0, 1e3, lo_open=True)
-        object.__setattr__(self, "values", v)
+        object.__setattr__(self, "values", _samples("values", self.values, self.dt))
         dist = np.atleast_1d(np.asarray(self.distribution, dtype=float))
         if dist.ndim != 1 or not np.all(np.isfinite(dist)):
             raise ParameterError("distribution must be a finite 1-d array: one weight per floor (and unit)")

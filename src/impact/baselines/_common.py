@@ -384,6 +384,16 @@ def stick_from(system: System, seg, stuck: Affine, exits, t: float, z, s0: float
     return stuck_phase(seg, stuck, exits, t, z, r, phase, scale)
 
 
+def after_phase(msg, fired, t: float, t0: float, idle: int) -> tuple[bool, str | None, int]:
+    """After a flight phase from t0 to t: (stop, failure, idle).  Stop on a failure (its status) or when no
+    event ended the phase (the run's end); a phase that did not advance time counts towards the idle limit."""
+    if msg:
+        return True, f"failed: {msg}", idle
+    if fired is None:
+        return True, None, idle
+    return False, None, idle + 1 if t - t0 <= 1e-12 * max(1.0, t) else 0
+
+
 def stuck_phase(seg, stuck: Affine, exits, t: float, z, r: float, phase: float, scale: float):
     """Hold the masses together (affine flow `stuck`) until one of the exit functionals fires.
 

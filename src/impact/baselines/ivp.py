@@ -58,6 +58,7 @@ from ._common import (
     Affine,
     Functional,
     ImpactLog,
+    after_phase,
     check_inputs,
     default_v_stick,
     free_affine,
@@ -341,10 +342,8 @@ def simulate_ivp(system: System, r: float, t_end: float, t_window: float, start:
             s0 = sd * half if sd else z[2] - z[0]
             exits = stuck_exit_functionals(system, sd, s0)
             t, z, released, msg, advanced = stick_from(system, seg, stuck, exits, t, z, s0, r, ph, scale)
-            if msg:
-                status = f"failed: {msg}"
-                break
-            if released is None:
+            if msg or released is None:  # failed, or stuck to the end of the run
+                status = f"failed: {msg}" if msg else status
                 break
             if advanced is not None:
                 idle = 0 if advanced else idle + 1
@@ -364,12 +363,10 @@ def simulate_ivp(system: System, r: float, t_end: float, t_window: float, start:
             ev_funcs.append((Functional(-sf * S_VEL), +1))
         t0 = t
         t, z, fired, msg = seg.run(aff, ev_funcs, t, z, fs, graze=[(g, i) for i, (g, _) in enumerate(walls)])
-        if msg:
-            status = f"failed: {msg}"
+        stop, failure, idle = after_phase(msg, fired, t, t0, idle)
+        if stop:
+            status = failure or status
             break
-        if fired is None:
-            break
-        idle = idle + 1 if t - t0 <= 1e-12 * max(1.0, t) else 0
         if idle > MAX_IDLE_PHASES:
             status = f"failed: no progress at t = {t:.6g} (accumulating events)"
             break

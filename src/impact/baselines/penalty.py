@@ -32,6 +32,7 @@ from ._common import (
     S_VEL,
     Functional,
     ImpactLog,
+    after_phase,
     check_inputs,
     default_v_stick,
     free_affine,
@@ -114,10 +115,8 @@ def simulate_penalty(system: System, r: float, t_end: float, t_window: float, st
             cs = (1 if s0 > 0 else -1) if abs(s0) > half else 0
             exits = stuck_exit_functionals(system, 0, s0, contact_of(cs))
             t, z, released, msg, advanced = stick_from(system, seg, stuck, exits, t, z, s0, r, ph, scale)
-            if msg:
-                status = f"failed: {msg}"
-                break
-            if released is None:
+            if msg or released is None:  # failed, or stuck to the end of the run
+                status = f"failed: {msg}" if msg else status
                 break
             idle = 0 if advanced else idle + 1
             z[2] = z[0] + s0
@@ -140,12 +139,10 @@ def simulate_penalty(system: System, r: float, t_end: float, t_window: float, st
         t0 = t
         graze = [(wall_gap(system, +1), 0), (wall_gap(system, -1), 1)] if cside == 0 else None
         t, z, fired, msg = seg.run(aff, events, t, z, graze=graze)
-        if msg:
-            status = f"failed: {msg}"
+        stop, failure, idle = after_phase(msg, fired, t, t0, idle)
+        if stop:
+            status = failure or status
             break
-        if fired is None:
-            break
-        idle = idle + 1 if t - t0 <= 1e-12 * max(1.0, t) else 0
         kind, wside = tags[fired]
         if kind == "enter":
             n_entries += 1

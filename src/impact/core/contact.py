@@ -126,14 +126,16 @@ def stays(kap, cq, pq):
 
 
 @njit(cache=True)
-def floor_decision(kap, cq, pq, a_f):
+def slide_decision(q, scale, a_f, zero_tol):
     """Friction, s' = 0 away from the walls: stick to the floor (0) or slide (sigma = -+1).
 
-    Sticking needs |x_f'' - a| <= a_f.  If the floor accelerates harder to the
-    right, the mass lags behind and slides with s' < 0.
+    q[0] is the acceleration the floor's friction must match (it can give at most a_f) and q[1:] its
+    next derivatives at this instant, scale[n] a bound of each.  A tie within zero_tol is decided by the
+    first derivative that is not zero.  If the drive is harder to the right, the mass lags behind and
+    slides with s' < 0.
     """
-    x2 = deriv_at0(kap, cq, pq, 0)
-    tol = _ZERO_TOL * (bound(kap, cq, pq, 0, 0.0) + a_f)
+    x2 = q[0]
+    tol = zero_tol * (scale[0] + a_f)
     if x2 > a_f + tol:
         return -1
     if x2 < -a_f - tol:
@@ -141,8 +143,18 @@ def floor_decision(kap, cq, pq, a_f):
     if abs(x2) < a_f - tol:
         return 0
     sgn = 1 if x2 > 0.0 else -1
-    for n in range(1, 4):
-        qn = deriv_at0(kap, cq, pq, n)
-        if abs(qn) > _ZERO_TOL * bound(kap, cq, pq, n, 0.0):
-            return -sgn if sgn * qn > 0.0 else 0
+    for n in range(1, q.shape[0]):
+        if abs(q[n]) > zero_tol * scale[n]:
+            return -sgn if sgn * q[n] > 0.0 else 0
     return 0
+
+
+@njit(cache=True)
+def floor_decision(kap, cq, pq, a_f):
+    """slide_decision for a unit on a floor: sticking needs |x_f'' - a| <= a_f (row cq, pq)."""
+    q = np.empty(4)
+    scale = np.empty(4)
+    for n in range(4):
+        q[n] = deriv_at0(kap, cq, pq, n)
+        scale[n] = bound(kap, cq, pq, n, 0.0)
+    return slide_decision(q, scale, a_f, _ZERO_TOL)

@@ -282,6 +282,25 @@ def _ends(kap, ek, c, p, big_t):
     return h0, d0, h1, d1
 
 
+@njit(cache=True, inline='always')
+def _probe(kap, c, p, t, peak, at):
+    """h at t, kept as the running peak if larger: returns (peak, where, h'(t))."""
+    h, dh = eval2(kap, c, p, t)
+    if abs(h) > peak:
+        return abs(h), t, dh
+    return peak, at, dh
+
+
+@njit(cache=True, inline='always')
+def _push(stack, top, a, b, da, db):
+    """An interval [a, b] with its end slopes onto the search's stack; returns the new top."""
+    stack[top, 0] = a
+    stack[top, 1] = b
+    stack[top, 2] = da
+    stack[top, 3] = db
+    return top + 1
+
+
 @njit(cache=True)
 def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
     """max(peak, max |h| over [0, T]), certified to PEAK_RTOL.
@@ -306,11 +325,7 @@ def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
     if max(abs(h0), abs(h1)) + m2 * big_t * big_t / 8.0 <= peak * (1.0 + PEAK_RTOL):
         return peak, at
     m3 = bound_tab(kpow, c, p, 3, big_t)
-    stack[0, 0] = 0.0
-    stack[0, 1] = big_t
-    stack[0, 2] = d0
-    stack[0, 3] = d1
-    top = 1
+    top = _push(stack, 0, 0.0, big_t, d0, d1)
     hmin = max(big_t, 1.0) * 1e-13
     visits = 0
     while top > 0:
@@ -341,38 +356,14 @@ def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
             left = max(a, tz - rho)
             right = min(b, tz + rho)
             if left > a:
-                hl, dl = eval2(kap, c, p, left)
-                if abs(hl) > peak:
-                    peak = abs(hl)
-                    at = left
-                stack[top, 0] = a
-                stack[top, 1] = left
-                stack[top, 2] = da
-                stack[top, 3] = dl
-                top += 1
+                peak, at, dl = _probe(kap, c, p, left, peak, at)
+                top = _push(stack, top, a, left, da, dl)
             if right < b:
-                hr, dr = eval2(kap, c, p, right)
-                if abs(hr) > peak:
-                    peak = abs(hr)
-                    at = right
-                stack[top, 0] = right
-                stack[top, 1] = b
-                stack[top, 2] = dr
-                stack[top, 3] = db
-                top += 1
+                peak, at, dr = _probe(kap, c, p, right, peak, at)
+                top = _push(stack, top, right, b, dr, db)
             continue
         mid = 0.5 * (a + b)
-        hm, dmid = eval2(kap, c, p, mid)
-        if abs(hm) > peak:
-            peak = abs(hm)
-            at = mid
-        stack[top, 0] = a
-        stack[top, 1] = mid
-        stack[top, 2] = da
-        stack[top, 3] = dmid
-        stack[top + 1, 0] = mid
-        stack[top + 1, 1] = b
-        stack[top + 1, 2] = dmid
-        stack[top + 1, 3] = db
-        top += 2
+        peak, at, dmid = _probe(kap, c, p, mid, peak, at)
+        top = _push(stack, top, a, mid, da, dmid)
+        top = _push(stack, top, mid, b, dmid, db)
     return peak, at

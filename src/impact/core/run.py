@@ -184,6 +184,25 @@ def _clear_of_walls(kpow, ek, c, p, lo, hi, big_t, delta):
             and hi - h1 >= delta and h1 - lo >= delta)
 
 
+SIDE_FOUND, SIDE_KEPT = 2, 3  # _earliest: the wall from the search, or the unit's entry untouched
+
+
+@njit(cache=True, inline='always')
+def _earliest(out, best, ties, j, kind, side, ev_t, ev_side, ev_kind):
+    """Unit j's event found by a search (out) becomes its event if it comes first (or ties, with ties);
+    returns the earliest time so far.  side: the event's wall (SIDE_FOUND: the one the search crossed,
+    SIDE_KEPT: the unit's entry left as it is)."""
+    if out[0] < best or (ties and out[0] == best):
+        ev_t[j] = out[0]
+        if side == SIDE_FOUND:
+            ev_side[j] = int(out[1])
+        elif side != SIDE_KEPT:
+            ev_side[j] = side
+        ev_kind[j] = kind
+        return out[0]
+    return best
+
+
 @njit(cache=True, inline='always')
 def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape, escape_v, tau_max,
                   r0, r1, ev_t, ev_side, ev_kind, cs, ps, cq, pq, out, kpow, ek, ek_tau, wt, diag):
@@ -221,11 +240,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
                 first_exit(kap, kpow, cs, ps, -half, half, best, escape[j], delta, out)
             diag[D_GRAZE] += out[2]
             diag[D_STEPS] += out[3]
-            if out[0] <= best:
-                best = out[0]
-                ev_t[j] = out[0]
-                ev_side[j] = int(out[1])
-                ev_kind[j] = EV_WALL
+            best = _earliest(out, best, True, j, EV_WALL, SIDE_FOUND, ev_t, ev_side, ev_kind)
             if fric is not None:
                 if fric[j] > 0.0:
                     # sigma s' > 0 while sliding; the slide ends where it reaches 0
@@ -237,11 +252,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
                     dv = _TOL * bound_tab(kpow, cq, pq, 0, 0.0)
                     first_exit(kap, kpow, cq, pq, 0.0, np.inf, best, escape_v[j], dv, out)
                     diag[D_STEPS] += out[3]
-                    if out[0] < best:
-                        best = out[0]
-                        ev_t[j] = out[0]
-                        ev_side[j] = 0
-                        ev_kind[j] = EV_SLIDE_STOP
+                    best = _earliest(out, best, False, j, EV_SLIDE_STOP, 0, ev_t, ev_side, ev_kind)
         elif mode[j] == MODE_STUCK:
             stuck_row(kap, C, P, f, side[j], uload[j] * r0, uload[j] * r1,
                       _unit_level(j, units, springs, fric), cq, pq)
@@ -252,10 +263,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
             first_exit(kap, kpow, cq, pq, -np.inf, 0.0, best, esc, delta, out)
             diag[D_GRAZE] += out[2]
             diag[D_STEPS] += out[3]
-            if out[0] <= best:
-                best = out[0]
-                ev_t[j] = out[0]
-                ev_kind[j] = EV_RELEASE
+            best = _earliest(out, best, True, j, EV_RELEASE, SIDE_KEPT, ev_t, ev_side, ev_kind)
         elif mode[j] == MODE_FLOOR:
             if fric is not None:
                 a_f = fric[j]
@@ -268,11 +276,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
                     esc = 1 if q0 > 0.0 else -1
                 first_exit(kap, kpow, cq, pq, -a_f, a_f, best, esc, delta, out)
                 diag[D_STEPS] += out[3]
-                if out[0] <= best:
-                    best = out[0]
-                    ev_t[j] = out[0]
-                    ev_side[j] = int(out[1])
-                    ev_kind[j] = EV_FLOOR_EXIT
+                best = _earliest(out, best, True, j, EV_FLOOR_EXIT, SIDE_FOUND, ev_t, ev_side, ev_kind)
     found = np.inf
     for j in range(um.shape[0]):
         if ev_t[j] < found:
