@@ -170,3 +170,19 @@ def ipc_class(aipc: float) -> int:
     if aipc <= 2.5:
         return 2
     return 3
+
+
+def energy_balance(work: float, viscous: float, impact_losses: float, friction: float, e0: float, e1: float,
+                   e_max: float) -> dict:
+    """A run's energy terms and the residual of its balance, work - losses - (E1 - E0).
+
+    The residual is normalised by the largest energy in play (the work, the losses or the most the run
+    stored), so that a run that stores far more than it exchanges (no damping, a mass started at a far
+    wall) is judged on the right scale.
+    """
+    losses = viscous + impact_losses + friction
+    residual = work - losses - (e1 - e0)
+    scale = max(abs(work), losses, e_max, 1e-300)
+    return {"energy_residual": float(residual / scale), "work_input": float(work),
+            "viscous_dissipation": float(viscous), "impact_losses": float(impact_losses),
+            "friction_work": float(friction)}

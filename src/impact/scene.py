@@ -23,7 +23,7 @@ import numpy as np
 from .building import Building
 from .core import layout as L
 from .core.run import run_scene
-from .params import G_GRAV, ParameterError, _check
+from .params import G_GRAV, ParameterError, _check, energy_balance
 
 DAMPER_TYPES = ("cid", "pid", "tmd")
 STARTS = ("centre", "left", "right")
@@ -382,12 +382,6 @@ def _scene_arrays(scene: Scene):
 
 
 def _diagnostics(diag: np.ndarray) -> dict:
-    work = diag[L.D_WORK]
-    losses = diag[L.D_VISC] + diag[L.D_IMPLOSS] + diag[L.D_FRICTION]
-    residual = work - losses - (diag[L.D_E1] - diag[L.D_E0])
-    # normalised by the largest energy in play, so that a lightly damped run
-    # storing far more than it exchanges is judged on the right scale
-    scale = max(abs(work), losses, diag[L.D_EMAX], 1e-300)
     return {
         "impacts": int(diag[L.D_IMPACTS]),
         "impacts_in_window": int(diag[L.D_IMPACTS_WIN]),
@@ -395,11 +389,8 @@ def _diagnostics(diag: np.ndarray) -> dict:
         "sticking_episodes": int(diag[L.D_STICKS]),
         "grazing_events": int(diag[L.D_GRAZE]),
         "max_penetration": float(max(diag[L.D_PEN], 0.0)),
-        "energy_residual": float(residual / scale),
-        "work_input": float(work),
-        "viscous_dissipation": float(diag[L.D_VISC]),
-        "impact_losses": float(diag[L.D_IMPLOSS]),
-        "friction_work": float(diag[L.D_FRICTION]),
+        **energy_balance(diag[L.D_WORK], diag[L.D_VISC], diag[L.D_IMPLOSS], diag[L.D_FRICTION], diag[L.D_E0],
+                         diag[L.D_E1], diag[L.D_EMAX]),
         "time_in_contact": float(diag[L.D_STUCKTIME]),
         "segments": int(diag[L.D_SEGMENTS]),
         "search_steps": int(diag[L.D_STEPS]),

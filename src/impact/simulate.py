@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from . import _kernels as K
-from .params import IPC_CLASSES, Protocol, System, ipc_class
+from .params import IPC_CLASSES, Protocol, System, energy_balance, ipc_class
 
 #: relative velocity below which a rebound is treated as sticking, in units of
 #: F0/K * omega (the velocity scale of the forcing); far below any resolved rebound
@@ -150,23 +150,14 @@ class RunResult:
 
 
 def _diagnostics(diag: np.ndarray) -> dict:
-    work = diag[K.D_WORK]
-    losses = diag[K.D_VISC] + diag[K.D_IMPLOSS] + diag[K.D_FRICTION]
-    residual = work - losses - (diag[K.D_E1] - diag[K.D_E0])
-    # a run that stores far more than it exchanges (no damping, a mass started at a far wall) is
-    # judged on the right scale: the largest of the work, the losses and the stored energy
-    scale = max(abs(work), losses, diag[K.D_EMAX], 1e-300)
     return {
         "impacts": int(diag[K.D_IMPACTS]),
         "impacts_in_window": int(diag[K.D_IMPACTS_WIN]),
         "sticking_episodes": int(diag[K.D_STICKS]),
         "grazing_events": int(diag[K.D_GRAZE]),
         "max_penetration": float(max(diag[K.D_PEN], 0.0)),
-        "energy_residual": float(residual / scale),
-        "work_input": float(work),
-        "viscous_dissipation": float(diag[K.D_VISC]),
-        "impact_losses": float(diag[K.D_IMPLOSS]),
-        "friction_work": float(diag[K.D_FRICTION]),
+        **energy_balance(diag[K.D_WORK], diag[K.D_VISC], diag[K.D_IMPLOSS], diag[K.D_FRICTION], diag[K.D_E0],
+                         diag[K.D_E1], diag[K.D_EMAX]),
         "time_in_contact": float(diag[K.D_STUCKTIME]),
         "search_steps": int(diag[K.D_STEPS]),
         "event_cap_reached": bool(diag[K.D_CAP]),
