@@ -311,7 +311,19 @@ def speed_at_equal_error(ds: xr.Dataset, error: str = "amplitude_error") -> pd.D
 # --------------------------------------------------------------------------- stability
 
 def extreme_cases(cfg: dict) -> dict:
-    """Name -> (system, r, start) of the stiff and extreme cases."""
+    """Name -> (system, r, start) of the stiff and extreme cases (those named in cfg's stability_cases, if
+    given)."""
+    cases = _all_extreme_cases()
+    chosen = cfg.get("stability_cases")
+    if chosen is None:
+        return cases
+    unknown = sorted(set(chosen) - set(cases))
+    if unknown:
+        raise ValueError(f"numerics.stability_cases: unknown case(s) {unknown}; allowed: {list(cases)}")
+    return {name: case for name, case in cases.items() if name in chosen}
+
+
+def _all_extreme_cases() -> dict:
     base = dict(mu=0.01, beta=0.0048, e=0.25)
 
     def cid(**kw):
