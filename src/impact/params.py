@@ -14,7 +14,7 @@ the library refuse bad input with the same words.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import KW_ONLY, asdict, dataclass, field
 
 DAMPER_KINDS = ("cid", "pid")
 STARTS = ("centre", "left", "right")
@@ -34,6 +34,19 @@ def _check(name: str, value: float, lo: float, hi: float, *, lo_open=False, hi_o
         rb = ")" if hi_open else "]"
         raise ParameterError(f"{name} = {value!r} is out of range: allowed {lb}{lo}, {hi}{rb}")
     return value
+
+
+def check_choice(name: str, value, allowed) -> None:
+    """Refuse a value that is not one of ``allowed``, naming the field and the choices."""
+    if value not in allowed:
+        raise ParameterError(f"{name} = {value!r} is not allowed: choose one of {', '.join(allowed)}")
+
+
+def check_fields(obj, **allowed: str) -> None:
+    """Check each named field of ``obj`` against its interval, written as the error message writes it."""
+    for name, interval in allowed.items():
+        lo, hi = (float(bound) for bound in interval[1:-1].split(","))
+        _check(name, getattr(obj, name), lo, hi, lo_open=interval[0] == "(", hi_open=interval[-1] == ")")
 
 
 def a_max(beta: float, force_ratio: float) -> float:
@@ -72,6 +85,7 @@ class System:
     beta: float
     e: float
     gap: float
+    _: KW_ONLY  # the optional parameters are named at every call
     rp: float = 0.0
     force_ratio: float = 0.096
     phase: float = 0.0
@@ -80,18 +94,10 @@ class System:
     unit_m: float = 0.01
 
     def __post_init__(self):
-        if self.kind not in DAMPER_KINDS:
-            raise ParameterError(f"kind = {self.kind!r} is not allowed: choose one of {', '.join(DAMPER_KINDS)}")
-        _check("mu", self.mu, 0.0, 10.0, lo_open=True)
-        _check("beta", self.beta, 0.0, 1.0, hi_open=True)
-        _check("e", self.e, 0.0, 1.0)
-        _check("gap", self.gap, 0.0, 1e12)
-        _check("rp", self.rp, 0.0, 1e4)
-        _check("force_ratio", self.force_ratio, 0.0, 1e12, lo_open=True)
-        _check("phase", self.phase, -2 * math.pi, 2 * math.pi)
-        _check("nu", self.nu, 0.0, 100.0)
-        _check("frequency_hz", self.frequency_hz, 0.0, 1e6, lo_open=True)
-        _check("unit_m", self.unit_m, 0.0, 1e6, lo_open=True)
+        check_choice("kind", self.kind, DAMPER_KINDS)
+        check_fields(self, mu="(0, 10]", beta="[0, 1)", e="[0, 1]", gap="[0, 1e12]", rp="[0, 1e4]",
+                     force_ratio="(0, 1e12]", phase=f"[{-2 * math.pi}, {2 * math.pi}]", nu="[0, 100]",
+                     frequency_hz="(0, 1e6]", unit_m="(0, 1e6]")
         if self.kind == "pid" and self.rp == 0.0:
             raise ParameterError("rp = 0.0 is out of range for kind 'pid': allowed (0, 10000]; a PID with r' = 0 is the CID")
         if self.kind == "cid" and self.rp != 0.0:
@@ -142,8 +148,7 @@ class Protocol:
     def __post_init__(self):
         _check("periods", self.periods, 0.0, 1e7, lo_open=True)
         _check("average_from", self.average_from, 0.0, self.periods, hi_open=True)
-        if self.start not in STARTS:
-            raise ParameterError(f"start = {self.start!r} is not allowed: choose one of {', '.join(STARTS)}")
+        check_choice("start", self.start, STARTS)
         if int(self.max_events_per_period) < 10:
             raise ParameterError("max_events_per_period must be >= 10")
 
@@ -186,3 +191,29 @@ def energy_balance(work: float, viscous: float, impact_losses: float, friction: 
     return {"energy_residual": float(residual / scale), "work_input": float(work),
             "viscous_dissipation": float(viscous), "impact_losses": float(impact_losses),
             "friction_work": float(friction)}
+
+
+# A kernel's diagnostics as named numbers: the name, its index's name in the kernel's layout, the type.
+# Each kernel reports the fields its layout defines, so the two kernels share one reader.
+_DIAGNOSTIC_FIELDS = (
+    ("impacts", "D_IMPACTS", int),
+    ("impacts_in_window", "D_IMPACTS_WIN", int),
+    ("simultaneous_impact_events", "D_SIMULTANEOUS", int),
+    ("sticking_episodes", "D_STICKS", int),
+    ("grazing_events", "D_GRAZE", int),
+    ("time_in_contact", "D_STUCKTIME", float),
+    ("segments", "D_SEGMENTS", int),
+    ("search_steps", "D_STEPS", int),
+    ("event_cap_reached", "D_CAP", bool),
+    ("uncertified_peak_segments", "D_PEAK_GAVE_UP", int),
+)
+
+
+def read_diagnostics(diag, layout) -> dict:
+    """The counters, the penetration and the energy balance of a kernel's diagnostics array."""
+    out = {name: kind(diag[getattr(layout, index)])
+           for name, index, kind in _DIAGNOSTIC_FIELDS if hasattr(layout, index)}
+    out["max_penetration"] = float(max(diag[layout.D_PEN], 0.0))
+    out.update(energy_balance(diag[layout.D_WORK], diag[layout.D_VISC], diag[layout.D_IMPLOSS],
+                              diag[layout.D_FRICTION], diag[layout.D_E0], diag[layout.D_E1], diag[layout.D_EMAX]))
+    return out

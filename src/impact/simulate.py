@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from . import _kernels as K
-from .params import IPC_CLASSES, Protocol, System, energy_balance, ipc_class
+from .params import IPC_CLASSES, Protocol, System, ipc_class, read_diagnostics
 
 #: relative velocity below which a rebound is treated as sticking, in units of
 #: F0/K * omega (the velocity scale of the forcing); far below any resolved rebound
@@ -149,21 +149,6 @@ class RunResult:
         return out
 
 
-def _diagnostics(diag: np.ndarray) -> dict:
-    return {
-        "impacts": int(diag[K.D_IMPACTS]),
-        "impacts_in_window": int(diag[K.D_IMPACTS_WIN]),
-        "sticking_episodes": int(diag[K.D_STICKS]),
-        "grazing_events": int(diag[K.D_GRAZE]),
-        "max_penetration": float(max(diag[K.D_PEN], 0.0)),
-        **energy_balance(diag[K.D_WORK], diag[K.D_VISC], diag[K.D_IMPLOSS], diag[K.D_FRICTION], diag[K.D_E0],
-                         diag[K.D_E1], diag[K.D_EMAX]),
-        "time_in_contact": float(diag[K.D_STUCKTIME]),
-        "search_steps": int(diag[K.D_STEPS]),
-        "event_cap_reached": bool(diag[K.D_CAP]),
-    }
-
-
 def simulate(system: System, r: float, protocol: Protocol = Protocol(), *, record: int = 0,
              state=None, contact=None, t0: float = 0.0) -> RunResult:
     """One run at frequency ratio r.
@@ -217,7 +202,7 @@ def _result(system, r, protocol, diag, z_out, final, rec) -> RunResult:
         amplitude_ratio=amp / amax if math.isfinite(amax) else math.nan,
         aipc=aipc,
         ipc_class=ipc_class(aipc),
-        diagnostics=_diagnostics(diag),
+        diagnostics=read_diagnostics(diag, K),
         final_state=z_out.copy(),
         final_contact=int(final),
         records=records,

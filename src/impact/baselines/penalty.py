@@ -28,21 +28,7 @@ from __future__ import annotations
 import math
 
 from ..params import System
-from ._common import (
-    S_VEL,
-    Functional,
-    ImpactLog,
-    after_phase,
-    check_inputs,
-    default_v_stick,
-    free_affine,
-    initial_state,
-    make_result,
-    stick_from,
-    stuck_affine,
-    stuck_exit_functionals,
-    wall_gap,
-)
+from . import _common as common
 from .ivp import MAX_IDLE_PHASES, Segments
 
 
@@ -70,7 +56,7 @@ def simulate_penalty(system: System, r: float, t_end: float, t_window: float, st
     v_stick     entries slower than this (default 1e-7 * force_ratio; e.g. a mass pushed into
                 the wall by friction from rest) are contact episodes, not impacts
     """
-    check_inputs(system, r, t_end, t_window, start)
+    common.check_inputs(system, r, t_end, t_window, start)
     k = float(stiffness)
     if not (math.isfinite(k) and k > 0.0):
         raise ValueError(f"stiffness = {stiffness!r} must be positive")
@@ -78,15 +64,15 @@ def simulate_penalty(system: System, r: float, t_end: float, t_window: float, st
         raise ValueError("the penalty method needs a clearance d > 0")
     _, cd = dashpot(system, k)
     seg = Segments(system, r, t_end, t_window, method, rtol, atol)
-    v_stick = default_v_stick(system, v_stick)
+    v_stick = common.default_v_stick(system, v_stick)
     n_entries = 0
     half = 0.5 * system.gap
     af, ph = system.friction_accel, system.phase
     scale = max(system.force_ratio, 1e-300)
-    log = ImpactLog()
-    stuck = stuck_affine(system)
+    log = common.ImpactLog()
+    stuck = common.stuck_affine(system)
 
-    z, side = initial_state(system, start)
+    z, side = common.initial_state(system, start)
     t = 0.0
     status = "ok"
     idle = 0
@@ -98,7 +84,7 @@ def simulate_penalty(system: System, r: float, t_end: float, t_window: float, st
     # initial phase: at a wall from rest the sign of s'' (or s''') decides contact or flight
     cside = 0
     if side != 0:
-        aff0 = free_affine(system, 0.0)
+        aff0 = common.free_affine(system, 0.0)
         acc = aff0.rate(0.0, z, r, ph)
         jerk = aff0.rate2(0.0, z, r, ph)
         a_s, j_s = side * (acc[3] - acc[1]), side * (jerk[3] - jerk[1])
@@ -113,8 +99,8 @@ def simulate_penalty(system: System, r: float, t_end: float, t_window: float, st
         if mode[0] == "stick":
             s0 = z[2] - z[0]
             cs = (1 if s0 > 0 else -1) if abs(s0) > half else 0
-            exits = stuck_exit_functionals(system, 0, s0, contact_of(cs))
-            t, z, released, msg, advanced = stick_from(system, seg, stuck, exits, t, z, s0, r, ph, scale)
+            exits = common.stuck_exit_functionals(system, 0, s0, contact_of(cs))
+            t, z, released, msg, advanced = common.stick_from(system, seg, stuck, exits, t, z, s0, r, ph, scale)
             if msg or released is None:  # failed, or stuck to the end of the run
                 status = f"failed: {msg}" if msg else status
                 break
@@ -126,20 +112,20 @@ def simulate_penalty(system: System, r: float, t_end: float, t_window: float, st
             continue
 
         sf = mode[1]
-        aff = free_affine(system, sf, contact_of(cside))
+        aff = common.free_affine(system, sf, contact_of(cside))
         if cside == 0:
-            events = [(wall_gap(system, +1), +1), (wall_gap(system, -1), +1)]
+            events = [(common.wall_gap(system, +1), +1), (common.wall_gap(system, -1), +1)]
             tags = [("enter", +1), ("enter", -1)]
         else:
-            events = [(wall_gap(system, cside), -1)]
+            events = [(common.wall_gap(system, cside), -1)]
             tags = [("exit", cside)]
         if sf != 0.0:
-            events.append((Functional(-sf * S_VEL), +1))
+            events.append((common.Functional(-sf * common.S_VEL), +1))
             tags.append(("slide", 0))
         t0 = t
-        graze = [(wall_gap(system, +1), 0), (wall_gap(system, -1), 1)] if cside == 0 else None
+        graze = [(common.wall_gap(system, +1), 0), (common.wall_gap(system, -1), 1)] if cside == 0 else None
         t, z, fired, msg = seg.run(aff, events, t, z, graze=graze)
-        stop, failure, idle = after_phase(msg, fired, t, t0, idle)
+        stop, failure, idle = common.after_phase(msg, fired, t, t0, idle)
         if stop:
             status = failure or status
             break
@@ -161,6 +147,6 @@ def simulate_penalty(system: System, r: float, t_end: float, t_window: float, st
             mode = ("stick",)
 
     max_pen = seg.max_pen
-    return make_result(log, t_end_req=t_end, t_reached=t, t_window=t_window, z=z, x2_integral=seg.x2,
+    return common.make_result(log, t_end_req=t_end, t_reached=t, t_window=t_window, z=z, x2_integral=seg.x2,
                        nfev=seg.nfev, n_steps=seg.n_steps, max_pen=max_pen, status=status,
                        method=f"penalty k={k:g} {method} rtol={rtol:g}")

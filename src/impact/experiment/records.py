@@ -237,6 +237,11 @@ def validate_header(raw: Mapping[str, Any]) -> dict[str, Any]:
 # ----------------------------------------------------------------------------
 
 
+def _entry(part: str, key: str) -> property:
+    """A read-only attribute for one entry of a record's header or columns."""
+    return property(lambda record: getattr(record, part)[key], doc=f"the record's {part} entry {key!r}")
+
+
 @dataclass(frozen=True)
 class Record:
     """One validated record: typed header and float64 columns (read-only arrays)."""
@@ -245,17 +250,9 @@ class Record:
     columns: dict[str, np.ndarray]
     path: Path | None = field(default=None, compare=False)
 
-    @property
-    def kind(self) -> str:
-        return self.header["kind"]
-
-    @property
-    def synthetic(self) -> bool:
-        return self.header["synthetic"]
-
-    @property
-    def t(self) -> np.ndarray:
-        return self.columns["t_s"]
+    kind = _entry("header", "kind")
+    synthetic = _entry("header", "synthetic")
+    t = _entry("columns", "t_s")
 
     @property
     def x(self) -> np.ndarray:
@@ -277,13 +274,8 @@ class Record:
             raise ValueError(f"unit {unit!r} is not one of {', '.join(UNITS)}")
         return self.columns[name] * (UNITS[self.header["units"]] / UNITS[unit])
 
-    @property
-    def drop_height_cm(self) -> np.ndarray:
-        return self.columns["drop_height_cm"]
-
-    @property
-    def rebound_height_cm(self) -> np.ndarray:
-        return self.columns["rebound_height_cm"]
+    drop_height_cm = _entry("columns", "drop_height_cm")
+    rebound_height_cm = _entry("columns", "rebound_height_cm")
 
 
 def _where(row: int, line: int | None) -> str:
