@@ -31,6 +31,23 @@ def test_calibrated_chi_gives_e_in_the_scaled_contact(e, n):
     assert abs(R.scaled_restitution(1.5 * (1 - e), n) - e) > 0.01 or e > 0.85
 
 
+def test_one_calibration_serves_every_job(monkeypatch):
+    """The stage calibrates each wall once; a job that adopts the file never solves for chi again."""
+    walls = R.contact_calibrations(None)
+    assert [w["wall"] for w in walls] == WALLS
+    assert {w["n"] for w in walls} == {1.5, 2.0}
+    monkeypatch.setattr(R, "_ADOPTED_CHI", {})
+    R.adopt_calibrations(walls)
+
+    def no_solving(e, n):
+        raise AssertionError(f"chi solved again for e={e}, n={n}")
+
+    monkeypatch.setattr(R, "solve_chi", no_solving)
+    cfg = R.merged_config(None)
+    for w in walls:
+        assert R.wall_contact(cfg, w["wall"], 0.02).chi == w["chi"]
+
+
 @pytest.mark.parametrize("wall", WALLS)
 @pytest.mark.parametrize("mu", [0.0054, 0.0252])
 def test_single_impact_in_the_rig_has_the_calibrated_e(wall, mu):

@@ -4,9 +4,32 @@
 # data of Figs. 3 and 5, the claims and the figures.  Everything here is synthetic.
 
 
+rule validation_contact_laws:
+    input:
+        rig_config=RIG_FILE,
+        library=LIB_EXPERIMENT,
+    output:
+        "results/validation/contact_laws.json",
+    log:
+        "results/logs/validation_contact_laws.log",
+    benchmark:
+        "results/benchmarks/validation_contact_laws.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=5,
+        mem_mb=1000,
+    params:
+        rig=RIG,
+    script:
+        "../scripts/validation_contact_laws.py"
+
+
 rule validation_case:
     input:
         rig_config=RIG_FILE,
+        contact_laws=rules.validation_contact_laws.output[0],
         library=LIB_EXPERIMENT,
     output:
         "results/validation/cases/{case}.json",
@@ -57,6 +80,7 @@ rule validation_grid:
 rule validation_drop_tests:
     input:
         rig_config=RIG_FILE,
+        contact_laws=rules.validation_contact_laws.output[0],
         library=LIB_EXPERIMENT,
     output:
         table="results/validation/drop_tests.csv",
@@ -80,6 +104,7 @@ rule validation_drop_tests:
 rule validation_fig3_data:
     input:
         rig_config=RIG_FILE,
+        contact_laws=rules.validation_contact_laws.output[0],
         library=LIB_EXPERIMENT,
     output:
         data="results/validation/fig3_data.json",
@@ -107,6 +132,7 @@ rule validation_fig3_data:
 rule validation_fig5_data:
     input:
         rig_config=RIG_FILE,
+        contact_laws=rules.validation_contact_laws.output[0],
         library=LIB_EXPERIMENT,
     output:
         data="results/validation/fig5_data.json",
@@ -199,6 +225,7 @@ rule validation_figures:
 
 
 if VALIDATION:
+    register(rules.validation_contact_laws)
     register(rules.validation_case, case=list(RIG_CASES))
     register(rules.validation_grid, report=("table",))
     register(rules.validation_drop_tests)

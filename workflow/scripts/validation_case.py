@@ -1,9 +1,10 @@
 """Glue: one case of the rig's grid -> model against rig, as one JSON file."""
 from impact.experiment.grid import Case
-from impact.experiment.validation import write_case
+from impact.experiment.validation import adopt_contact_laws, write_case
 from impact.pipeline import logged
 
 with logged(snakemake.log[0]) as log:
+    adopt_contact_laws(snakemake.input.contact_laws)
     result = write_case(snakemake.params.rig, Case.of(snakemake.params.case), snakemake.output[0])
     log.info("%s: x_max model %.4g mm, rig %.4g mm", result.row["case"], result.row["model_xmax_mm"],
              result.row["rig_xmax_mm"])

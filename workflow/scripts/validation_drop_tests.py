@@ -1,6 +1,7 @@
 """Glue: the rig's configuration -> synthetic drop tests and e recovered by Eq. (3b)."""
-from impact.experiment.validation import write_drop_tests
+from impact.experiment.validation import adopt_contact_laws, write_drop_tests
 from impact.pipeline import logged
 
 with logged(snakemake.log[0]):
+    adopt_contact_laws(snakemake.input.contact_laws)
     write_drop_tests(snakemake.params.rig, snakemake.output.table, snakemake.output.records)

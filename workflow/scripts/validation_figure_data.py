@@ -1,8 +1,9 @@
 """Glue: the rig's configuration -> the data of Fig. 3 or Fig. 5 (JSON, tables, records)."""
-from impact.experiment.validation import write_fig3_data, write_fig5_data
+from impact.experiment.validation import adopt_contact_laws, write_fig3_data, write_fig5_data
 from impact.pipeline import logged
 
 with logged(snakemake.log[0]):
+    adopt_contact_laws(snakemake.input.contact_laws)
     out = snakemake.output
     write = write_fig3_data if snakemake.rule == "validation_fig3_data" else write_fig5_data
     panels = {name: getattr(out, name) for name in out.keys() if name not in ("data", "decay", "sweep")}

@@ -127,8 +127,20 @@ def _scaled_contact(chi: float, n: float) -> tuple[float, float, float]:
     return float(-w_end), float(sol.t_events[0][0]), float(np.max(sol.y[0]))
 
 
-@functools.lru_cache(maxsize=64)
+# chi already solved for, by (e, n): an earlier calibration adopted with adopt_calibrations
+_ADOPTED_CHI: dict[tuple[float, float], float] = {}
+
+
 def calibrate_chi(e: float, n: float) -> float:
+    """Hunt--Crossley damping chi giving restitution e for F = k delta^n (1 + chi delta'/v_in).
+
+    An adopted calibration (:func:`adopt_calibrations`) is used as it is; otherwise :func:`solve_chi`.
+    """
+    return _ADOPTED_CHI.get((float(e), float(n))) or solve_chi(e, n)
+
+
+@functools.lru_cache(maxsize=64)
+def solve_chi(e: float, n: float) -> float:
     """Hunt--Crossley damping chi giving restitution e for F = k delta^n (1 + chi delta'/v_in).
 
     Root of e_eff(chi) = e by Brent's method on the scaled isolated contact
@@ -171,25 +183,54 @@ class Wall:
     thickness_m: float = math.inf   # lining thickness (inf: bare steel)
 
 
-def wall_contact(cfg: dict, wall: str, ball_radius_m: float) -> Wall:
-    """The contact law of ``wall`` for a ball of radius ``ball_radius_m`` (SI), chi calibrated."""
-    spec = cfg["walls"][wall]
-    e = float(spec["e"])
+def _wall_law(cfg: dict, spec: dict, ball_radius_m: float) -> tuple[float, float, float]:
+    """(k, n, lining thickness) of a wall's contact law for a ball of radius ``ball_radius_m`` (SI)."""
     law = spec.get("law", "hertz")
-    scale = float(cfg["contact"].get("stiffness_scale", 1.0))
     if law == "hertz":
         eb, nb = float(cfg["balls"]["youngs_modulus_pa"]), float(cfg["balls"]["poisson"])
         ew, nw = float(spec["youngs_modulus_pa"]), float(spec["poisson"])
         e_star = 1.0 / ((1 - nb**2) / eb + (1 - nw**2) / ew)
-        k, n, thick = 4.0 / 3.0 * e_star * math.sqrt(ball_radius_m), 1.5, math.inf
-    elif law == "layer":
+        return 4.0 / 3.0 * e_star * math.sqrt(ball_radius_m), 1.5, math.inf
+    if law == "layer":
         thick = float(spec["thickness_mm"]) * 1e-3
-        k, n = math.pi * ball_radius_m * float(spec["layer_modulus_pa"]) / thick, 2.0
-    elif law == "power":
-        k, n, thick = float(spec["k"]), float(spec["n"]), math.inf
-    else:
-        raise ValueError(f"wall {wall}: unknown contact law {law!r} (hertz, layer, power)")
+        return math.pi * ball_radius_m * float(spec["layer_modulus_pa"]) / thick, 2.0, thick
+    if law == "power":
+        return float(spec["k"]), float(spec["n"]), math.inf
+    raise ValueError(f"unknown contact law {law!r} (hertz, layer, power)")
+
+
+def wall_contact(cfg: dict, wall: str, ball_radius_m: float) -> Wall:
+    """The contact law of ``wall`` for a ball of radius ``ball_radius_m`` (SI), chi calibrated."""
+    spec = cfg["walls"][wall]
+    e = float(spec["e"])
+    try:
+        k, n, thick = _wall_law(cfg, spec, ball_radius_m)
+    except ValueError as err:
+        raise ValueError(f"wall {wall}: {err}") from None
+    scale = float(cfg["contact"].get("stiffness_scale", 1.0))
     return Wall(wall, e, k * scale, n, calibrate_chi(e, n), thick)
+
+
+def contact_calibrations(cfg: dict | None = None) -> list[dict]:
+    """chi of every wall of the configuration: one calibration that all of the rig's runs can share.
+
+    The exponent n does not depend on the ball, so one chi serves every ball against a wall.
+    """
+    cfg = merged_config(cfg)
+    out = []
+    for wall, spec in cfg["walls"].items():
+        e, n = float(spec["e"]), _wall_law(cfg, spec, 1.0)[1]
+        out.append({"wall": wall, "e": e, "n": n, "chi": solve_chi(e, n)})
+    return out
+
+
+def adopt_calibrations(entries) -> None:
+    """Use the chi of an earlier :func:`contact_calibrations` instead of solving for it again.
+
+    Keyed by (e, n), so an entry that no longer matches the configuration is simply not used.
+    """
+    for item in entries:
+        _ADOPTED_CHI[(float(item["e"]), float(item["n"]))] = float(item["chi"])
 
 
 def pendulum_length(rp: float, omega: float, ball_radius_m: float, g: float = G_STANDARD,

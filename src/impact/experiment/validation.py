@@ -24,6 +24,7 @@ from .comparison import CaseResult, _map, _run_case_worker, ablation, drop_tests
 from .grid import Case, study_cases, validation_config
 from .plotting import plot_fig3, plot_fig5, plot_histories
 from .records import Record, write_record
+from .rig import adopt_calibrations, contact_calibrations
 
 # where each figure's records go, under the stage's records folder (one folder per panel)
 FIG3_RECORDS = ("fig3a", "fig3b_paper_grid", "fig3b_fine_grid")
@@ -53,6 +54,23 @@ def _write_records(folder: Path, recs: Iterable[Record]) -> None:
         tag = f"r{h['r']:.4f}" if "r" in h else (f"x0_{h['x0_mm']:g}mm" if "x0_mm" in h else "drops")
         src = "rig" if h.get("source", "").startswith("virtual rig") else "model"
         write_record(Path(folder) / f"{src}_{h['kind']}_{tag}.csv", rec)
+
+
+# ----------------------------------------------------------------------------
+# the walls' contact laws, calibrated once for every job of the stage
+# ----------------------------------------------------------------------------
+
+
+def write_contact_laws(cfg: dict, path) -> list[dict]:
+    """Each wall's calibrated Hunt--Crossley damping chi (:func:`.rig.contact_calibrations`), as JSON."""
+    walls = contact_calibrations(cfg)
+    _write_json(path, {"walls": walls})
+    return walls
+
+
+def adopt_contact_laws(path) -> None:
+    """Take each wall's chi from :func:`write_contact_laws`' file rather than solving for it again."""
+    adopt_calibrations(json.loads(Path(path).read_text())["walls"])
 
 
 # ----------------------------------------------------------------------------
@@ -211,6 +229,7 @@ def run_validation(cfg: dict | None, out_dir, cases=None, *, smoke: bool = False
     out.mkdir(parents=True, exist_ok=True)
     cases = study_cases(cfg, smoke) if cases is None else [Case.of(c) for c in cases]
     nproc = int(processes if processes is not None else cfg["processes"])
+    write_contact_laws(cfg, out / "contact_laws.json")  # solved here once; forked workers inherit it
     results = _map(_run_case_worker, [(cfg, c, None) for c in cases], nproc)
     table, curves, delta = grid_tables(results)
     for frame, name in ((table, "validation_table"), (curves, "validation_curves"), (delta, "validation_delta")):

@@ -1,0 +1,7 @@
+"""Glue: the rig's configuration -> each wall's calibrated contact damping, shared by the stage's jobs."""
+from impact.experiment.validation import write_contact_laws
+from impact.pipeline import logged
+
+with logged(snakemake.log[0]) as log:
+    for wall in write_contact_laws(snakemake.params.rig, snakemake.output[0]):
+        log.info("%s: e = %.4g, n = %g, chi = %.12g", wall["wall"], wall["e"], wall["n"], wall["chi"])
