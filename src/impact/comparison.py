@@ -88,8 +88,10 @@ def x_m_rows(datasets: dict) -> list:
         for s in starts:
             g_opt, xm = best[s]
             others = [(o, best[o][1]) for o in starts if o != s and abs(_rel(best[o][1], paper)) <= TOLERANCE]
+            refined = float(ds["X_m_refined"].sel(start=s, gap_ratio=g_opt)) if math.isfinite(g_opt) else math.nan
             rows.append(_row(figure, case, "X_m at optimum g", s, paper, xm, _xm_reason(ds, s, g_opt, others))
-                        | {"g_optimum": g_opt})
+                        | {"g_optimum": g_opt, "refined_at_g_optimum": refined,
+                           "grid_underestimate": (refined - xm) / refined})
     return rows
 
 
@@ -167,7 +169,7 @@ def paper_vs_reproduced(datasets: dict, tmd: dict | None) -> pd.DataFrame:
     rows = (x_m_rows(datasets) + two_ipc_rows(datasets) + e_trend_rows(datasets) + friction_rows(datasets)
             + tmd_rows(tmd, datasets))
     cols = ["figure", "case", "quantity", "start", "paper", "reproduced", "rel_difference", "within_10pct",
-            "g_optimum", "reason"]
+            "g_optimum", "refined_at_g_optimum", "grid_underestimate", "reason"]
     return pd.DataFrame(rows, columns=cols)
 
 
@@ -184,6 +186,12 @@ def coexistence_table(paper: dict, from_rest: dict, continuation: dict, ensemble
         candidates = {}
         for start in ds_rest["start"].values:
             candidates[f"from_rest, start {start}"] = optimum(ds_rest, str(start))
+        # the paper's possible reading: Masri's closed form where a stable 2-EIPC orbit exists
+        if "X_m_closed_form" in ds_rest:
+            candidates["closed form alone"] = optimum(ds_rest, None, "X_m_closed_form")
+            for start in ds_rest["start"].values:
+                candidates[f"hybrid (closed form, else from_rest), start {start}"] = optimum(
+                    ds_rest, str(start), "X_m_hybrid")
         for (cid2, mode), ds in continuation.items():
             if cid2 == cid:
                 for start in ds["start"].values:

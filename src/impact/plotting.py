@@ -33,6 +33,8 @@ def _draw_curve(ax, ds, spec, color):
         ipc = ds["ipc_class_at_max"].sel(start=start).values
         style = START_STYLE.get(str(start), "-")
         ax.plot(g, xm, style, color=color, lw=1.0, label=f"{curve_label(spec)}, start {start}")
+        if "X_m_refined" in ds:  # the true peak between grid frequencies, as a thin line
+            ax.plot(g, ds["X_m_refined"].sel(start=start).values, style, color=color, lw=0.4)
         for cls, (marker, fill, _) in IPC_MARKERS.items():
             sel = ipc == cls
             if np.any(sel):
@@ -41,6 +43,7 @@ def _draw_curve(ax, ds, spec, color):
 
 
 def _legend_for_markers(ax):
+    ax.plot([], [], "-", color="0.3", lw=0.4, label="thin: peak refined between grid frequencies")
     for cls, (marker, fill, label) in IPC_MARKERS.items():
         ax.plot([], [], marker, color="0.3", markerfacecolor="0.3" if fill == "full" else "white",
                 linestyle="none", label=label)

@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from .params import ParameterError, Protocol, System
+from .readings import add_readings
 from .simulate import frequency_grid, sweep
 
 
@@ -112,18 +113,23 @@ def run_curve(cfg: dict, spec: dict, gap_ratios=None, mode: str = "from_rest"):
     r = freq_grid(cfg)
     proto_cfg = cfg["protocol"]
     starts = curve_starts(cfg, spec)
-    results = []
-    for start in starts:
-        protocol = Protocol(periods=proto_cfg["periods"], average_from=proto_cfg["average_from"], start=start)
-        results.append([sweep(curve_system(cfg, spec, g), r, protocol, mode=mode) for g in gaps])
-    base = curve_system(cfg, spec, float(gaps[0]))
-    return curve_dataset(base, gaps, starts, results, protocol, curve={"id": curve_id(spec), **spec}, config=cfg,
-                         sweep_mode=mode)
+    systems = [curve_system(cfg, spec, float(g)) for g in gaps]
+    protocols = [Protocol(periods=proto_cfg["periods"], average_from=proto_cfg["average_from"], start=start)
+                 for start in starts]
+    results = [[sweep(system, r, protocol, mode=mode) for system in systems] for protocol in protocols]
+    ds = curve_dataset(systems[0], gaps, starts, results, protocols[-1], curve={"id": curve_id(spec), **spec},
+                       config=cfg, sweep_mode=mode)
+    if mode == "from_rest":  # the readings are of runs from rest; a continuation's are another measure
+        add_readings(ds, systems, protocols)
+    return ds
 
 
-def optimum(ds, start: str) -> tuple[float, float]:
-    """(g, X_m) at the lowest X_m of one start's curve (the paper's 'optimum gap ratio')."""
-    xm = ds["X_m"].sel(start=start).values
+def optimum(ds, start: str | None, reading: str = "X_m") -> tuple[float, float]:
+    """(g, X_m) at the lowest X_m of one start's curve (the paper's 'optimum gap ratio').
+
+    reading: the variable read as X_m (X_m_refined, X_m_hybrid; X_m_closed_form has no start: None).
+    """
+    xm = (ds[reading] if start is None else ds[reading].sel(start=start)).values
     if not np.any(np.isfinite(xm)):
         return math.nan, math.nan
     i = int(np.nanargmin(xm))

@@ -62,7 +62,7 @@ LIB_CORE = library(
     "core/layout.py",
     "core/jitcache.py",
 )
-LIB_SWEEP = LIB_CORE + library("dataset.py", "study.py")
+LIB_SWEEP = LIB_CORE + library("dataset.py", "study.py", "readings.py", "masri.py")
 LIB_TMD = library("tmd.py", "pipeline.py", "io.py", "params.py")
 LIB_PLOT = library("plotting.py", "study.py", "pipeline.py", "io.py")
 LIB_TABLE = library("comparison.py", "study.py", "pipeline.py", "io.py")
