@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 import xarray as xr
 from reference import copy_workflow
@@ -42,6 +43,9 @@ def test_smoke_dag_produces_every_output(smoke):
             assert path.stat().st_size > 5000, path
     table = (smoke / "results" / "tables" / "paper_vs_reproduced.csv").read_text()
     assert "X_m at optimum g" in table and "optimum beta_t" in table
+    optima = pd.read_csv(smoke / "results" / "tables" / "paper_vs_reproduced.csv").query("quantity == 'X_m at optimum g'")
+    assert (optima["refined_at_g_optimum"] >= optima["reproduced"]).all()
+    assert (optima["grid_underestimate"] >= 0).all()
     # every job left a log and a benchmark beside its output
     assert list((smoke / "results" / "logs" / "sweep_curve").glob("*.log"))
     assert list((smoke / "results" / "benchmarks" / "sweep_curve").glob("*.tsv"))
