@@ -108,3 +108,18 @@ def test_refined_peak_of_an_untouched_damper_is_the_analytic_resonance_peak():
     assert amplitude == pytest.approx(-best.fun, rel=1e-8)
     assert amplitude > max(run.amplitude for run in runs)  # the grid missed the top
     assert r_peak == pytest.approx(best.x, abs=1e-4)
+
+
+@pytest.mark.parametrize("hybrid, explains", [((0.31, 0.23, 0.41), True), ((0.31, 0.25, 0.27), False)])
+def test_closed_form_statement_judges_all_three_values(hybrid, explains):
+    import pandas as pd
+
+    from impact.comparison import closed_form_statement
+
+    curves = ["e25", "e45", "e65"]
+    table = pd.DataFrame({"curve": curves, "paper_X_m": [0.32, 0.22, 0.40],
+                          "X_m [closed form alone]": [0.09, 0.07, 0.07], "g [closed form alone]": [0.2] * 3,
+                          "X_m [hybrid, start left]": list(hybrid), "g [hybrid, start left]": [1.6, 1.8, 2.4]})
+    text = closed_form_statement(table, dict(zip(curves, (0.25, 0.45, 0.65))))
+    assert ("This reading explains the paper's values (hybrid, start left)" in text) == explains
+    assert ("does not explain the paper's e-trend" in text) != explains

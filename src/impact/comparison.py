@@ -247,3 +247,28 @@ def e_trend_statement(table: pd.DataFrame, e_of: dict) -> str:
                 "for: " + "; ".join(found) + ". " + verdict)
     return (f"No sweep mode, start or ensemble statistic gives X_m lowest at the middle e (e = {es}): "
             "the paper's e-trend is not explained by the initial condition or the sweep protocol here")
+
+
+def closed_form_statement(table: pd.DataFrame, e_of: dict) -> str:
+    """Does reading X_m from Masri's closed form, where a stable 2-EIPC orbit exists, give the paper's e-trend?"""
+    curves = sorted((e_of[c], c) for c in table["curve"] if c in e_of)
+    readings = [c[len("X_m ["):-1] for c in table.columns
+                if c.startswith("X_m [") and ("closed form" in c or "hybrid" in c)]
+    if len(curves) < 3 or not readings:
+        return "no closed-form reading in the study (it needs three frictionless CID curves of different e)"
+
+    def values(reading, key="X_m"):
+        return [float(table.loc[table["curve"] == cid, f"{key} [{reading}]"].iloc[0]) for _, cid in curves]
+
+    paper = [float(table.loc[table["curve"] == cid, "paper_X_m"].iloc[0]) for _, cid in curves]
+    parts, explains = [], []
+    for reading in readings:
+        xm, g = values(reading), values(reading, "g")
+        parts.append(f"{reading}: " + "/".join(f"{v:.3f} (g = {gi:g})" for v, gi in zip(xm, g)))
+        if all(math.isfinite(v) and abs(v - q) <= TOLERANCE * q for v, q in zip(xm, paper)):
+            explains.append(reading)
+    verdict = (f"This reading explains the paper's values ({'; '.join(explains)})." if explains else
+               "No closed-form reading gives all three of the paper's values within 10 %: reading x_max from the "
+               "closed form where it exists does not explain the paper's e-trend.")
+    return (f"X_m at the optimum gap read from Masri's closed form (e = {'/'.join(f'{e:g}' for e, _ in curves)}; "
+            f"paper {'/'.join(f'{q:.2f}' for q in paper)}): " + "; ".join(parts) + ". " + verdict)

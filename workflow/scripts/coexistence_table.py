@@ -3,7 +3,7 @@ import json
 
 import xarray as xr
 
-from impact.comparison import X_M_AT_OPTIMUM, coexistence_table, e_trend_statement
+from impact.comparison import X_M_AT_OPTIMUM, closed_form_statement, coexistence_table, e_trend_statement
 from impact.io import write_csv_atomic, write_json_atomic
 from impact.pipeline import logged
 from impact.study import curve_id
@@ -25,7 +25,7 @@ with logged(snakemake.log[0]) as log:
         ds = xr.load_dataset(path)
         ensembles[ds.attrs["curve"]] = ds
     table = coexistence_table(paper, rest, continuation, ensembles)
-    statement = e_trend_statement(table, e_of)
+    statement = {"e_trend": e_trend_statement(table, e_of), "closed_form_reading": closed_form_statement(table, e_of)}
     log.info("%s\n%s", table.T.to_string(), statement)
     write_csv_atomic(snakemake.output.table, table)
-    write_json_atomic(snakemake.output.statement, {"e_trend": statement})
+    write_json_atomic(snakemake.output.statement, statement)
