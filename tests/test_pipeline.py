@@ -46,6 +46,9 @@ def test_smoke_dag_produces_every_output(smoke):
     optima = pd.read_csv(smoke / "results" / "tables" / "paper_vs_reproduced.csv").query("quantity == 'X_m at optimum g'")
     assert (optima["refined_at_g_optimum"] >= optima["reproduced"]).all()
     assert (optima["grid_underestimate"] >= 0).all()
+    table1 = pd.read_csv(smoke / "results" / "tables" / "table1_measured.csv").set_index(["row", "design"])
+    assert set(table1.index.get_level_values("row")) == {2, 5, 6, 7, 9, 10}
+    assert table1.loc[(9, "tmd"), "number"] <= 1e-9  # a TMD is linear
     # every job left a log and a benchmark beside its output
     assert list((smoke / "results" / "logs" / "sweep_curve").glob("*.log"))
     assert list((smoke / "results" / "benchmarks" / "sweep_curve").glob("*.tsv"))

@@ -266,3 +266,41 @@ def plot_stability_map(table, outputs) -> None:
     for out in outputs:
         save_atomic(fig, out)
     plt.close(fig)
+
+
+ROBUSTNESS_PANELS = (
+    ("scale", "force amplitude over the design's", "log"),
+    ("drift", "drift of the structure's frequency", "linear"),
+    ("damping", "damper damping ratio", "log"),
+    ("e", "coefficient of restitution e", "linear"),
+)
+
+
+def plot_robustness(designs: dict, outputs) -> None:
+    """X_m against each variation (Table 1's rows 9, 6, 7 and 10), one line per design, design points marked.
+
+    designs: design name -> its robustness dataset.
+    """
+    fig, axes = plt.subplots(2, 2, figsize=(11.0, 8.0))
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    design_at = {"scale": lambda ds: 1.0, "drift": lambda ds: 0.0, "e": lambda ds: None, "damping": lambda ds: None}
+    for ax, (name, label, xscale) in zip(axes.flat, ROBUSTNESS_PANELS):
+        for k, (design, ds) in enumerate(designs.items()):
+            if f"X_m_vs_{name}" not in ds:
+                continue
+            color = colors[k % len(colors)]
+            ax.plot(ds[name].values, ds[f"X_m_vs_{name}"].values, "o-", ms=3, lw=1.0, color=color, label=design)
+            at = design_at[name](ds)
+            if at is not None:
+                ax.plot([at], [float(ds["X_m_design"])], "*", ms=9, color=color)
+        ax.set_xscale(xscale)
+        ax.set_xlabel(label)
+        ax.set_ylabel("amplitude ratio X_m")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle("Table 1 in numbers: X_m as what the designer does not control changes (stars: design points)",
+                 fontsize=10)
+    fig.tight_layout()
+    for out in outputs:
+        save_atomic(fig, out)
+    plt.close(fig)

@@ -12,6 +12,7 @@ from impact.experiment.grid import SCHEMA_PATH as RIG_SCHEMA
 from impact.experiment.grid import study_cases, validation_config
 from impact.numerics import stability_families, work_precision_pieces
 from impact.provenance import git_state
+from impact.robustness import design_names
 from impact.study import all_curves, check_config, curve_id, figure_curves, friction_scale
 
 check_config(config)
@@ -33,6 +34,7 @@ SECTIONS = {
     "masri": "4. Closed form (Masri, 2 EIPC)",
     "coexistence": "5. Initial conditions and coexisting states",
     "numerics": "6. Numerics",
+    "robustness": "7. Table 1 in numbers",
 }
 
 
@@ -64,6 +66,10 @@ LIB_CORE = library(
 )
 LIB_SWEEP = LIB_CORE + library("dataset.py", "study.py", "readings.py", "masri.py")
 LIB_TMD = library("tmd.py", "pipeline.py", "io.py", "params.py")
+LIB_SCENE = LIB_CORE + library(
+    "scene.py", "building.py", "records.py", "core/contact.py", "core/modal.py", "core/run.py"
+)
+LIB_ROBUSTNESS = LIB_SCENE + library("robustness.py", "study.py")
 LIB_PLOT = library("plotting.py", "study.py", "pipeline.py", "io.py")
 LIB_TABLE = library("comparison.py", "study.py", "pipeline.py", "io.py")
 LIB_NUMERICS = LIB_CORE + library(
@@ -111,6 +117,9 @@ if VALIDATION:
     validate(RIG, str(RIG_SCHEMA))
     RIG = validation_config(RIG, smoke=VALIDATION.get("smoke", False))
     RIG_CASES = {c.id: dataclasses.asdict(c) for c in study_cases(RIG, VALIDATION.get("smoke", False))}
+# Table 1 in numbers: its designs, and the sweeps their optimum gaps come from
+ROBUSTNESS = "robustness" in config
+ROBUSTNESS_DESIGNS = design_names(config) if ROBUSTNESS else []
 COEXISTENCE_CURVES = config.get("coexistence", {}).get("curves", [])
 COEXISTENCE_MODES = config.get("coexistence", {}).get("modes", ["continuation_up", "continuation_down"])
 
@@ -143,3 +152,25 @@ def executor_name(wildcards):
     """The executor this Snakemake was started with (local, slurm, ...), for the report."""
     plugin = workflow.executor_plugin
     return plugin.name if plugin is not None else "unknown"
+
+
+def robustness_curves():
+    """The sweeps whose optimum gaps are the robustness stage's CID and PID design points."""
+    rb = config["robustness"]
+    specs = [{"damper": "cid", "mu": rb["mu"], "e": rb["e"]}]
+    specs += [{"damper": "pid", "mu": rb["mu"], "e": rb["e"], "rp": rp} for rp in rb["pid_tunings"]]
+    missing = [curve_id(s) for s in specs if curve_id(s) not in CURVES]
+    if missing:
+        raise WorkflowError(
+            f"robustness: its designs need the sweeps {', '.join(missing)}; add them to a figure's curves"
+        )
+    return specs
+
+
+def robustness_sweeps(wildcards):
+    return [sweep_file(spec) for spec in robustness_curves()]
+
+
+def robustness_params(wildcards):
+    """Only what the stage's numbers depend on."""
+    return {key: config[key] for key in ("robustness", "structure", "protocol")}

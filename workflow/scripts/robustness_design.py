@@ -1,0 +1,19 @@
+"""Glue: one design point -> its X_m along every variation that applies (results/robustness/<design>.nc)."""
+import json
+
+from impact.io import write_dataset
+from impact.params import Protocol
+from impact.pipeline import log_versions, logged
+from impact.robustness import Design, design_dataset, grids, stroke_cap
+from impact.study import freq_grid
+
+with logged(snakemake.log[0]) as log:
+    log_versions()
+    study = snakemake.params.study
+    designs = json.loads(open(snakemake.input.designs).read())
+    design = Design(**designs[snakemake.wildcards.design])
+    protocol = Protocol(periods=study["protocol"]["periods"], average_from=study["protocol"]["average_from"])
+    cap = stroke_cap(designs) if design.kind == "tmd" else None
+    ds = design_dataset(design, grids(study, designs["tmd"]["damping"]), freq_grid(study), protocol, stroke_cap=cap)
+    log.info("%s: X_m %.4f at the design point", snakemake.wildcards.design, float(ds["X_m_design"]))
+    write_dataset(ds, snakemake.output[0])
