@@ -3,8 +3,9 @@
 A :class:`Design` is one damper on the paper's one-storey structure (model units: M = 1, K = 1, so the
 structure's frequency is 1), at its design point: the CID and PID at their optimum gap ratio, the TMD at
 its equal-peak optimum.  Every measure is the paper's X_m, the largest protocol amplitude over a grid of
-forcing frequencies divided by the bare structure's resonant amplitude, taken on the exact scene core
-(:mod:`impact.scene`) under changed conditions:
+forcing frequencies divided by the bare structure's resonant amplitude, taken under changed conditions on
+the exact scene core (:mod:`impact.scene`), or for the undamped CID and PID on the paper kernel through an
+exact similarity (:func:`paper_system`):
 
 * the force amplitude scaled by s with the physical gap left as designed (Table 1, row 9);
 * the structure's frequency drifted by a factor 1 + delta through its stiffness, the damper left as
@@ -25,8 +26,9 @@ import numpy as np
 import pandas as pd
 
 from .building import Building
-from .params import Protocol, a_max, check_choice, check_fields
+from .params import Protocol, System, a_max, check_choice, check_fields
 from .scene import Damper, Harmonic, Scene, amplitude, simulate_scene
+from .simulate import simulate
 
 KINDS = ("cid", "pid", "tmd")
 BAND = 0.25   # "X_m stays within 25 % of its design value"
@@ -100,8 +102,36 @@ def bare_amplitude(design: Design, conditions: Conditions = Conditions()) -> flo
     return a_max(design.beta, conditions.scale * design.force_ratio) / conditions.frequency ** 2
 
 
+def paper_system(design: Design, conditions: Conditions = Conditions()) -> System:
+    """The undamped CID or PID under ``conditions`` as the paper kernel's System, by exact similarity.
+
+    In the drifted structure's own time (t' = (1 + delta) t) and the same lengths, the motion is the design's
+    with the force F s / (1 + delta)^2, the same clearance d and the pendulum's frequency r' / (1 + delta).
+    """
+    if design.kind == "tmd" or design.damping != 0.0:
+        raise ValueError("the paper kernel has no TMD and no pendulum damping")
+    w = conditions.frequency
+    return System(design.kind, mu=design.mu, beta=design.beta, e=design.e, gap=design.gap,
+                  rp=design.tuning / w if design.kind == "pid" else 0.0,
+                  force_ratio=conditions.scale * design.force_ratio / (w * w))
+
+
 def peak_response(design: Design, r_grid, protocol: Protocol, conditions: Conditions = Conditions()) -> dict:
-    """X_m over the frequency grid, its frequency, and the damper's stroke (largest over the grid, and at X_m)."""
+    """X_m over the frequency grid and its frequency; with the scene core also the damper's stroke (the
+    largest over the grid, and at X_m).  The undamped CID and PID run on the paper kernel (:func:`paper_system`),
+    five to ten times faster, which gives no stroke; :func:`scene_peak_response` measures it."""
+    r_grid = np.asarray(r_grid, dtype=float)
+    if design.kind != "tmd" and design.damping == 0.0:
+        system = paper_system(design, conditions)
+        start = replace(protocol, start=design.start)
+        ratios = np.array([simulate(system, float(r), start).amplitude_ratio for r in r_grid])
+        i = int(np.argmax(ratios))
+        return {"X_m": float(ratios[i]), "r_at_max": float(r_grid[i])}
+    return scene_peak_response(design, r_grid, protocol, conditions)
+
+
+def scene_peak_response(design: Design, r_grid, protocol: Protocol, conditions: Conditions = Conditions()) -> dict:
+    """:func:`peak_response` on the scene core, for any damper, with its stroke."""
     amps, strokes = [], []
     for r in np.asarray(r_grid, dtype=float):
         result = simulate_scene(design_scene(design, float(r), protocol, conditions))
@@ -199,14 +229,17 @@ def design_dataset(design: Design, grids: dict, r_grid, protocol: Protocol, stro
     wanted = {name: np.asarray(grids[name], dtype=float) for name in applicable(design.kind) if name in grids}
     sweeps = sensitivity(design, r_grid, protocol, scales=wanted.get("scale", ()), drifts=wanted.get("drift", ()),
                          dampings=wanted.get("damping", ()), restitutions=wanted.get("e", ()))
-    data = {f"{m}_design": ((), sweeps["design"][m], {"long_name": f"{text}, at the design point", "units": u})
+    # the stroke needs the scene core; at the design point it is always measured (Table 1, row 5)
+    design_point = {**scene_peak_response(design, r_grid, protocol), **sweeps["design"]}
+    data = {f"{m}_design": ((), design_point[m], {"long_name": f"{text}, at the design point", "units": u})
             for m, (text, u) in MEASURES.items()}
     coords = {}
     for name, values in wanted.items():
         text, units = VARIATIONS[name]
         coords[name] = (name, values, {"long_name": text, "units": units})
         for m, (mtext, u) in MEASURES.items():
-            data[f"{m}_vs_{name}"] = (name, [run[m] for run in sweeps[name]], {"long_name": mtext, "units": u})
+            if all(m in run for run in sweeps[name]):
+                data[f"{m}_vs_{name}"] = (name, [run[m] for run in sweeps[name]], {"long_name": mtext, "units": u})
     if stroke_cap is not None:
         beta_t, capped = capped_tmd_damping(design, r_grid, protocol, stroke_cap)
         data["stroke_cap"] = ((), stroke_cap, {"long_name": "the stroke the TMD is held to: half a CID's gap",
