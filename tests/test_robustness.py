@@ -101,7 +101,7 @@ def test_a_number_supports_its_word_when_it_orders_like_the_words():
     designs["pid"] = _fake("pid", 0.5, scale=[2.0, 0.5, 0.4])  # now more sensitive than the CID
     table = table1_measured(designs).set_index(["row", "design"])
     assert table.loc[(9, "cid"), "supports"] == "no" and table.loc[(9, "pid"), "supports"] == "no"
-    assert table.loc[(7, "cid"), "supports"] == "n/a" and math.isnan(table.loc[(7, "cid"), "number"])
+    assert table.loc[(7, "cid"), "supports"] == "not judged" and math.isnan(table.loc[(7, "cid"), "number"])
 
 
 def test_designs_are_the_sweeps_optima():

@@ -266,12 +266,12 @@ def max_change(ds, name: str) -> float:
     return float(np.max(np.abs(ds[key].values / float(ds["X_m_design"]) - 1.0)))
 
 
-# Table 1 of the paper: its row, characteristic and words for the CID, PID and TMD ("n/a": its "~ . ~")
+# Table 1 of the paper: its row, characteristic and words for the CID, PID and TMD ("not rated": its "~ . ~")
 TABLE1 = [
     (2, "effectiveness for steady-state motion", ("moderate", "moderate", "high")),
     (5, "space requirement", ("moderate", "moderate", "high")),
-    (6, "sensitivity to tuning", ("n/a", "low", "high")),
-    (7, "sensitivity to damping of the damper", ("n/a", "n/a", "high")),
+    (6, "sensitivity to tuning", ("not rated", "low", "high")),
+    (7, "sensitivity to damping of the damper", ("not rated", "not rated", "high")),
     (9, "sensitivity to amplitude of the excitation", ("high", "moderate", "low")),
     (10, "material dependence (coefficient of restitution)", ("moderate", "moderate", "moderate")),
 ]
@@ -289,10 +289,10 @@ _NUMBERS = {
 def _supports(rank: int | None, number: float, others: list[tuple[int | None, float]]) -> str:
     """Does the number order like the word against every other damper's (higher word, larger number)?"""
     if rank is None or not math.isfinite(number):
-        return "n/a"
+        return "not judged"
     ordered = [(r, n) for r, n in others if r is not None and math.isfinite(n) and r != rank]
     if not ordered:
-        return "n/a"
+        return "not judged"
     ok = all((n < number) if r < rank else (n > number) for r, n in ordered)
     return "yes" if ok else "no"
 
@@ -342,6 +342,8 @@ def _note(ds, row: int) -> str:
                 f"{float(ds['X_m_design']):.3f})")
     if row == 5 and kind != "tmd":
         return "bounded by half the gap: the mass travels between the walls"
+    if row == 10 and kind == "tmd":
+        return "a TMD has no impacts: nothing in it depends on e"
     return ""
 
 
