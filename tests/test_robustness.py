@@ -14,7 +14,9 @@ from impact.robustness import (
     Design,
     design_dataset,
     designs_from_study,
+    multi_unit,
     peak_response,
+    same_level,
     scene_peak_response,
     stroke_cap,
     table1_measured,
@@ -122,3 +124,36 @@ def test_design_dataset_holds_only_what_applies():
     assert "X_m_vs_e" in cid and "X_m_vs_damping" not in cid
     tmd = design_dataset(Design("tmd", 0.01, BETA, tuning=0.989, damping=0.062), grids, R[:2], SHORT)
     assert "X_m_vs_e" not in tmd and "X_m_vs_damping" in tmd
+
+
+def test_the_one_unit_row_is_the_single_damper():
+    """n = 1 of the multi-unit rows is the single damper's X_m (scene core against the paper kernel), and
+    identical units that start together move as one, so every n gives it too."""
+    design = Design("cid", 0.01, BETA, gap_ratio=1.6, start="left")
+    r = np.array([1.0])
+    rows = multi_unit(design, [1, 2, 9], r, SHORT, members=1, seed=3)
+    single = peak_response(design, r, SHORT)["X_m"]
+    assert rows["symmetric"][0] == pytest.approx(single, rel=1e-9)
+    assert rows["staggered"][0] == pytest.approx(single, rel=1e-9)
+    assert rows["symmetric"] == pytest.approx([single] * 3, rel=1e-9)
+    assert rows["staggered"][2] != pytest.approx(single, rel=1e-3)  # spread over the gap, they do not
+
+
+def test_units_started_at_a_wall_are_the_protocols_wall_start():
+    design = Design("pid", 0.01, BETA, gap_ratio=1.4, tuning=0.5, start="left")
+    r = np.array([0.98, 1.02])
+    wall = scene_peak_response(design, r, SHORT)
+    placed = scene_peak_response(design, r, SHORT, unit_starts=[-0.5 * design.gap])
+    assert placed == wall
+
+
+def test_the_multi_unit_verdict_reads_each_start_against_its_own_single_unit():
+    ds = xr.Dataset({"X_m_units_symmetric": ("units", [0.30, 0.30, 0.30]),
+                     "X_m_units_staggered": ("units", [0.30, 0.31, 0.40]),
+                     "X_m_units_ensemble": (("units", "member"), [[0.5, 0.3, 0.4], [0.4, 0.42, 0.41], [0.4, 0.4, 0.4]])},
+                    coords={"units": [1, 2, 9]})
+    change, holds = same_level(ds)
+    assert change == pytest.approx(0.40 / 0.30 - 1) and not holds
+    ds["X_m_units_staggered"] = ("units", [0.30, 0.31, 0.32])
+    change, holds = same_level(ds)
+    assert change == pytest.approx(0.32 / 0.30 - 1) and holds

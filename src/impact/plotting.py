@@ -281,7 +281,7 @@ def plot_robustness(designs: dict, outputs) -> None:
 
     designs: design name -> its robustness dataset.
     """
-    fig, axes = plt.subplots(2, 2, figsize=(11.0, 8.0))
+    fig, axes = plt.subplots(2, 3, figsize=(15.0, 8.0))
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     design_at = {"scale": lambda ds: 1.0, "drift": lambda ds: 0.0, "e": lambda ds: None, "damping": lambda ds: None}
     for ax, (name, label, xscale) in zip(axes.flat, ROBUSTNESS_PANELS):
@@ -298,9 +298,29 @@ def plot_robustness(designs: dict, outputs) -> None:
         ax.set_ylabel("amplitude ratio X_m")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
+    _plot_units(axes.flat[len(ROBUSTNESS_PANELS)], designs, colors)
+    axes.flat[-1].set_visible(False)
     fig.suptitle("Table 1 in numbers: X_m as what the designer does not control changes (stars: design points)",
                  fontsize=10)
     fig.tight_layout()
     for out in outputs:
         save_atomic(fig, out)
     plt.close(fig)
+
+
+def _plot_units(ax, designs: dict, colors) -> None:
+    """X_m against the number of units: all at the design's start (solid), staggered (dashed), the
+    ensemble's range (band)."""
+    for k, (design, ds) in enumerate(designs.items()):
+        if "X_m_units_symmetric" not in ds:
+            continue
+        color, n = colors[k % len(colors)], ds["units"].values
+        ens = ds["X_m_units_ensemble"].values
+        ax.plot(n, ds["X_m_units_symmetric"].values, "o-", ms=3, lw=1.0, color=color, label=design)
+        ax.plot(n, ds["X_m_units_staggered"].values, "s--", ms=3, lw=1.0, color=color)
+        ax.fill_between(n, ens.min(axis=1), ens.max(axis=1), color=color, alpha=0.15, lw=0)
+    ax.set_xlabel("number of units (same total mass and gap)")
+    ax.set_ylabel("amplitude ratio X_m")
+    ax.set_title("solid: units start together; dashed: staggered; band: random starts", fontsize=8)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)

@@ -46,6 +46,7 @@ class Design:
     tuning      the PID's r' or the TMD's f: the damper's frequency over the structure's design frequency
     damping     the TMD's damping ratio beta_t, or the PID's pendulum damping ratio (0 in the paper)
     start       where the damper mass starts (CID, PID): centre, left or right
+    units       n identical units of mass mu/n each, with the same gap (Bapat and Sankar's multi-unit damper)
     """
 
     kind: str
@@ -57,6 +58,7 @@ class Design:
     damping: float = 0.0
     start: str = "centre"
     force_ratio: float = 0.096
+    units: int = 1
 
     def __post_init__(self):
         check_choice("kind", self.kind, KINDS)
@@ -82,19 +84,24 @@ class Conditions:
         return 1.0 + self.drift
 
 
-def design_scene(design: Design, r: float, protocol: Protocol, conditions: Conditions = Conditions()) -> Scene:
-    """One run: the design under ``conditions``, forced at r times the structure's own frequency."""
+def design_scene(design: Design, r: float, protocol: Protocol, conditions: Conditions = Conditions(),
+                 unit_starts=None) -> Scene:
+    """One run: the design under ``conditions``, forced at r times the structure's own frequency.
+
+    unit_starts: each unit's initial place between its walls (default: all at the design's start)."""
     w = conditions.frequency
     building = Building.explicit([1.0], [w * w], zeta=design.beta)
     if design.kind == "tmd":
         damper = Damper("tmd", mass=design.mu, tuning=design.tuning / w, damping=design.damping)
     else:
         damper = Damper(design.kind, mass=design.mu, gap=design.gap, e=design.e,
-                        tuning=design.tuning / w if design.kind == "pid" else 0.0, damping=design.damping)
+                        tuning=design.tuning / w if design.kind == "pid" else 0.0, damping=design.damping,
+                        units=design.units)
     period = 2.0 * math.pi / w
     return Scene(building, (damper,), Harmonic(conditions.scale * design.force_ratio, r * w, 0.0),
                  duration=protocol.periods * period, window=protocol.average_from * period,
-                 start=design.start if design.kind != "tmd" else "centre")
+                 start=design.start if design.kind != "tmd" else "centre",
+                 unit_starts=None if unit_starts is None else tuple(unit_starts))
 
 
 def bare_amplitude(design: Design, conditions: Conditions = Conditions()) -> float:
@@ -121,7 +128,7 @@ def peak_response(design: Design, r_grid, protocol: Protocol, conditions: Condit
     largest over the grid, and at X_m).  The undamped CID and PID run on the paper kernel (:func:`paper_system`),
     five to ten times faster, which gives no stroke; :func:`scene_peak_response` measures it."""
     r_grid = np.asarray(r_grid, dtype=float)
-    if design.kind != "tmd" and design.damping == 0.0:
+    if design.kind != "tmd" and design.damping == 0.0 and design.units == 1:
         system = paper_system(design, conditions)
         start = replace(protocol, start=design.start)
         ratios = np.array([simulate(system, float(r), start).amplitude_ratio for r in r_grid])
@@ -130,11 +137,12 @@ def peak_response(design: Design, r_grid, protocol: Protocol, conditions: Condit
     return scene_peak_response(design, r_grid, protocol, conditions)
 
 
-def scene_peak_response(design: Design, r_grid, protocol: Protocol, conditions: Conditions = Conditions()) -> dict:
+def scene_peak_response(design: Design, r_grid, protocol: Protocol, conditions: Conditions = Conditions(),
+                        unit_starts=None) -> dict:
     """:func:`peak_response` on the scene core, for any damper, with its stroke."""
     amps, strokes = [], []
     for r in np.asarray(r_grid, dtype=float):
-        result = simulate_scene(design_scene(design, float(r), protocol, conditions))
+        result = simulate_scene(design_scene(design, float(r), protocol, conditions, unit_starts))
         amps.append(amplitude(result))
         strokes.append(float(np.max(result.peak_strokes)))
     amps, strokes = np.array(amps), np.array(strokes)
@@ -249,6 +257,8 @@ def design_dataset(design: Design, grids: dict, r_grid, protocol: Protocol, stro
         data["X_m_capped"] = ((), capped["X_m"], {"long_name": "X_m of the TMD with its stroke capped",
                                                   "units": "1"})
     ds = xr.Dataset(data, coords=coords)
+    if design.kind != "tmd" and grids.get("units"):
+        add_multi_unit(ds, design, grids["units"], r_grid, protocol, grids["members"], grids["seed"])
     ds.attrs.update({"title": f"Table 1 in numbers: design {design.kind}", "kind": design.kind,
                      "design": str(design.__dict__),
                      "a_max": a_max(design.beta, design.force_ratio), "periods": protocol.periods,
@@ -320,7 +330,19 @@ def table1_measured(designs: dict) -> pd.DataFrame:
                          "paper_word": word, "measure": what, "number": value,
                          "supports": _supports(rank, value, others), "band_lo": lo, "band_hi": hi,
                          "note": _note(ds, row)})
+    rows += [_multi_unit_row(name, ds) for name, ds in designs.items() if "X_m_units_symmetric" in ds]
     return pd.DataFrame(rows)
+
+
+def _multi_unit_row(name: str, ds) -> dict:
+    change, holds = same_level(ds)
+    n = ds["units"].values
+    return {"row": 5, "characteristic": f"space: {n.max()} units instead of one (Ref. 14: up to 9 units give "
+            "the same level of performance)", "design": name, "damper": ds.attrs["kind"].upper(),
+            "paper_word": "same level", "measure": "largest relative change of X_m from one unit, each start "
+            f"(same, staggered, ensemble median) against its own one-unit value, n = {', '.join(map(str, n))}",
+            "number": change, "supports": "yes" if holds else "no", "band_lo": math.nan, "band_hi": math.nan,
+            "note": f"'same level' read as within {SAME_LEVEL:.0%}"}
 
 
 def _band(ds, row: int) -> tuple[float, float]:
@@ -389,14 +411,18 @@ def stroke_cap(designs: dict) -> float:
 
 
 def grids(cfg: dict, tmd_beta_t: float) -> dict:
-    """The variations' values: log grids for the force scale and the damping, linear ones for drift and e."""
+    """The variations' values (log grids for the force scale and the damping, linear ones for drift and e),
+    and the multi-unit split: its numbers of units, ensemble size and seed."""
     rb = cfg["robustness"]
+    if 1 not in rb["units"]:
+        raise ValueError("robustness.units must include 1: the single unit every split is compared with")
 
     def log_grid(spec):
         return np.geomspace(spec["min"], spec["max"], spec["n"])
 
     e = rb["restitution"]
-    return {"scale": log_grid(rb["scales"]), "drift": np.linspace(rb["drifts"]["min"], rb["drifts"]["max"],
+    return {"units": list(rb["units"]), "members": rb["ensemble"]["members"], "seed": rb["ensemble"]["seed"],
+            "scale": log_grid(rb["scales"]), "drift": np.linspace(rb["drifts"]["min"], rb["drifts"]["max"],
                                                                   rb["drifts"]["n"]),
             "damping": tmd_beta_t * log_grid(rb["damping_factors"]),
             "e": np.round(np.arange(e["min"], e["max"] + 0.5 * e["step"], e["step"]), 10)}
@@ -414,3 +440,67 @@ def optima_from_sweeps(datasets) -> dict:
         key = "cid" if spec["damper"] == "cid" else f"rp{spec['rp']:g}"
         out[key] = {str(s): optimum(ds, str(s))[0] for s in ds["start"].values}
     return out
+
+
+
+# ----------------------------------------------------------------------------
+# several units (Ref. 14 of the paper: up to 9 units perform as one)
+# ----------------------------------------------------------------------------
+
+SAME_LEVEL = 0.10   # "the same level of performance": X_m within 10 % of the single unit's
+
+
+def staggered_starts(n: int, gap: float) -> np.ndarray:
+    """n units spread evenly over the clearance, from one wall to the other."""
+    return np.linspace(-0.5 * gap, 0.5 * gap, n)
+
+
+def random_starts(n: int, gap: float, seed: int, member: int) -> np.ndarray:
+    """n units at seeded uniform places between their walls (one ensemble member)."""
+    return np.random.default_rng([seed, n, member]).uniform(-0.5 * gap, 0.5 * gap, n)
+
+
+def multi_unit(design: Design, units, r_grid, protocol: Protocol, members: int, seed: int) -> dict:
+    """X_m of the design split into n units of the same total mass and gap, for each n in ``units``.
+
+    'symmetric': every unit at the design's start (identical units that start together move as one);
+    'staggered': the units spread evenly from wall to wall; 'ensemble': ``members`` seeded random starts.
+    """
+    if design.kind == "tmd":
+        raise ValueError("the multi-unit rows are the impact dampers'")
+    out = {"symmetric": [], "staggered": [], "ensemble": []}
+    for n in units:
+        split = replace(design, units=int(n))
+        out["symmetric"].append(scene_peak_response(split, r_grid, protocol)["X_m"])
+        out["staggered"].append(scene_peak_response(split, r_grid, protocol, unit_starts=(
+            staggered_starts(n, design.gap) if n > 1 else None))["X_m"])
+        out["ensemble"].append([scene_peak_response(split, r_grid, protocol,
+                                                    unit_starts=random_starts(n, design.gap, seed, m))["X_m"]
+                                for m in range(members)])
+    return out
+
+
+def add_multi_unit(ds, design: Design, units, r_grid, protocol: Protocol, members: int, seed: int) -> None:
+    """The multi-unit rows as variables over ``units`` (and ``member`` for the ensemble)."""
+    rows = multi_unit(design, units, r_grid, protocol, members, seed)
+    ds.coords["units"] = ("units", np.asarray(units, dtype=np.int64), {
+        "long_name": "number of identical units (same total mass and gap)", "units": "1"})
+    ds.coords["member"] = ("member", np.arange(members), {"long_name": "ensemble member (seeded starts)",
+                                                           "units": "1"})
+    ds["X_m_units_symmetric"] = ("units", rows["symmetric"], {
+        "long_name": "X_m with every unit at the design's start", "units": "1"})
+    ds["X_m_units_staggered"] = ("units", rows["staggered"], {
+        "long_name": "X_m with the units spread evenly from wall to wall", "units": "1"})
+    ds["X_m_units_ensemble"] = (("units", "member"), rows["ensemble"], {
+        "long_name": "X_m with the units at seeded random places between their walls", "units": "1"})
+    ds.attrs["ensemble_seed"] = seed
+
+
+def same_level(ds) -> tuple[float, bool]:
+    """The largest relative change of X_m from one unit to n, each kind of start against its own single-unit
+    value (the ensemble by its median), and whether it stays within SAME_LEVEL."""
+    curves = [ds["X_m_units_symmetric"].values, ds["X_m_units_staggered"].values,
+              np.median(ds["X_m_units_ensemble"].values, axis=1)]
+    one = list(ds["units"].values).index(1)
+    change = float(max(np.max(np.abs(c / c[one] - 1.0)) for c in curves))
+    return change, change <= SAME_LEVEL

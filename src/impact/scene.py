@@ -156,6 +156,8 @@ class Scene:
     window     the RMS window starts here (None: 0 for records, half the duration for a harmonic load)
     start      where every wall damper's mass starts: centre, or resting on the left or right wall
     gravity    acceleration of gravity in the scene's units (friction only)
+    unit_starts  each unit's initial displacement from the middle of its walls, in unit_list() order
+               (overrides start; a unit at +-d/2 rests on that wall; a TMD's entry must be 0)
     """
 
     building: Building
@@ -166,9 +168,12 @@ class Scene:
     start: str = "centre"
     gravity: float = G_GRAV
     max_events_per_period: int = 20000
+    unit_starts: tuple | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "dampers", tuple(self.dampers))
+        if self.unit_starts is not None:
+            self._check_unit_starts()
         check_choice("start", self.start, STARTS)
         if self.load is None:
             raise ParameterError("load is required: Harmonic, GroundMotion or ForceRecord")
@@ -190,6 +195,16 @@ class Scene:
                                  "allowed integers >= 10")
         if len(self.unit_list()) > 60:
             raise ParameterError("at most 60 damper units in one scene")
+
+    def _check_unit_starts(self) -> None:
+        starts = tuple(float(x) for x in self.unit_starts)
+        units = self.unit_list()
+        if len(starts) != len(units):
+            raise ParameterError(f"unit_starts has {len(starts)} values for {len(units)} damper units: give one per unit")
+        for k, (x, (_, d)) in enumerate(zip(starts, units)):
+            half = 0.5 * d.gap if d.kind != "tmd" else 0.0
+            _check(f"unit_starts[{k}]", x, -half, half)
+        object.__setattr__(self, "unit_starts", starts)
 
     @property
     def t_end(self) -> float:
@@ -321,6 +336,11 @@ def _initial_state(scene: Scene, floor: np.ndarray, gap: np.ndarray, kind: np.nd
             continue
         if gap[j] == 0.0:
             mode[j] = L.MODE_LOCKED
+        elif scene.unit_starts is not None:
+            x = scene.unit_starts[j]
+            q[nf + j] = x
+            if abs(x) == 0.5 * gap[j]:  # on a wall: resting against it, as the protocol's wall starts
+                mode[j], side[j] = L.MODE_STUCK, (1 if x > 0 else -1)
         elif scene.start != "centre":
             s = 1 if scene.start == "right" else -1
             q[nf + j] = s * 0.5 * gap[j]
