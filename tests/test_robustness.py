@@ -157,3 +157,11 @@ def test_the_multi_unit_verdict_reads_each_start_against_its_own_single_unit():
     ds["X_m_units_staggered"] = ("units", [0.30, 0.31, 0.32])
     change, holds = same_level(ds)
     assert change == pytest.approx(0.32 / 0.30 - 1) and holds
+
+
+def test_the_multi_unit_verdict_is_withheld_where_a_run_failed():
+    ds = xr.Dataset({"X_m_units_symmetric": ("units", [0.30, 0.30]),
+                     "X_m_units_staggered": ("units", [0.30, np.nan]),
+                     "X_m_units_ensemble": (("units", "member"), [[0.3], [0.3]])}, coords={"units": [1, 9]})
+    change, holds = same_level(ds)
+    assert math.isnan(change) and holds is None

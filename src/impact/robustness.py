@@ -341,8 +341,11 @@ def _multi_unit_row(name: str, ds) -> dict:
             "the same level of performance)", "design": name, "damper": ds.attrs["kind"].upper(),
             "paper_word": "same level", "measure": "largest relative change of X_m from one unit, each start "
             f"(same, staggered, ensemble median) against its own one-unit value, n = {', '.join(map(str, n))}",
-            "number": change, "supports": "yes" if holds else "no", "band_lo": math.nan, "band_hi": math.nan,
-            "note": f"'same level' read as within {SAME_LEVEL:.0%}"}
+            "number": change, "supports": {True: "yes", False: "no", None: "not judged"}[holds],
+            "band_lo": math.nan, "band_hi": math.nan,
+            "note": f"'same level' read as within {SAME_LEVEL:.0%}" if holds is not None else
+            "X_m undefined for some n: a run of the split damper stopped at the event cap (the units' grazing "
+            "contacts accumulate), so the claim is not judged"}
 
 
 def _band(ds, row: int) -> tuple[float, float]:
@@ -496,11 +499,16 @@ def add_multi_unit(ds, design: Design, units, r_grid, protocol: Protocol, member
     ds.attrs["ensemble_seed"] = seed
 
 
-def same_level(ds) -> tuple[float, bool]:
+def same_level(ds) -> tuple[float, bool | None]:
     """The largest relative change of X_m from one unit to n, each kind of start against its own single-unit
-    value (the ensemble by its median), and whether it stays within SAME_LEVEL."""
+    value (the ensemble by its median), and whether it stays within SAME_LEVEL.
+
+    (NaN, None) when an X_m is undefined: a run of the split damper stopped at the event cap.
+    """
     curves = [ds["X_m_units_symmetric"].values, ds["X_m_units_staggered"].values,
               np.median(ds["X_m_units_ensemble"].values, axis=1)]
+    if not all(np.all(np.isfinite(c)) for c in curves):
+        return math.nan, None
     one = list(ds["units"].values).index(1)
     change = float(max(np.max(np.abs(c / c[one] - 1.0)) for c in curves))
     return change, change <= SAME_LEVEL
