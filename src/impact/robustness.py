@@ -123,12 +123,17 @@ def paper_system(design: Design, conditions: Conditions = Conditions()) -> Syste
                   force_ratio=conditions.scale * design.force_ratio / (w * w))
 
 
+def on_paper_kernel(design: Design) -> bool:
+    """Whether the paper kernel runs this design: one undamped CID or PID unit."""
+    return design.kind != "tmd" and design.damping == 0.0 and design.units == 1
+
+
 def peak_response(design: Design, r_grid, protocol: Protocol, conditions: Conditions = Conditions()) -> dict:
     """X_m over the frequency grid and its frequency; with the scene core also the damper's stroke (the
     largest over the grid, and at X_m).  The undamped CID and PID run on the paper kernel (:func:`paper_system`),
     five to ten times faster, which gives no stroke; :func:`scene_peak_response` measures it."""
     r_grid = np.asarray(r_grid, dtype=float)
-    if design.kind != "tmd" and design.damping == 0.0 and design.units == 1:
+    if on_paper_kernel(design):
         system = paper_system(design, conditions)
         start = replace(protocol, start=design.start)
         ratios = np.array([simulate(system, float(r), start).amplitude_ratio for r in r_grid])
@@ -171,7 +176,7 @@ def within_band(x, xm, design_value: float, at: float, band: float = BAND) -> tu
 def sensitivity(design: Design, r_grid, protocol: Protocol, *, scales=(), drifts=(), dampings=(),
                 restitutions=()) -> dict:
     """X_m (and stroke) along each requested variation; each list is swept alone, the rest as designed."""
-    out = {"design": peak_response(design, r_grid, protocol)}
+    out = {}
     out["scale"] = [peak_response(design, r_grid, protocol, Conditions(scale=s)) for s in scales]
     out["drift"] = [peak_response(design, r_grid, protocol, Conditions(drift=d)) for d in drifts]
     out["damping"] = [peak_response(replace(design, damping=z), r_grid, protocol) for z in dampings]
@@ -180,15 +185,16 @@ def sensitivity(design: Design, r_grid, protocol: Protocol, *, scales=(), drifts
 
 
 def capped_tmd_damping(design: Design, r_grid, protocol: Protocol, stroke_cap: float, *, tol: float = 1e-3,
-                       beta_t_max: float = 0.9) -> tuple[float, dict]:
+                       beta_t_max: float = 0.9, at: dict | None = None) -> tuple[float, dict]:
     """The smallest beta_t (from the design's up) whose largest stroke over the grid is within ``stroke_cap``.
 
-    Bisection on beta_t: a TMD's stroke falls as its damping rises.  Returns (beta_t, its peak response).
+    Bisection on beta_t: a TMD's stroke falls as its damping rises.  ``at``: the design's own peak response,
+    if already run.  Returns (beta_t, its peak response).
     """
     if design.kind != "tmd":
         raise ValueError("only a TMD's stroke is capped by raising its damping")
     lo, hi = design.damping, beta_t_max
-    at = peak_response(design, r_grid, protocol)
+    at = at or peak_response(design, r_grid, protocol)
     if at["stroke_max"] <= stroke_cap:
         return lo, at
     top = peak_response(replace(design, damping=hi), r_grid, protocol)
@@ -237,8 +243,10 @@ def design_dataset(design: Design, grids: dict, r_grid, protocol: Protocol, stro
     wanted = {name: np.asarray(grids[name], dtype=float) for name in applicable(design.kind) if name in grids}
     sweeps = sensitivity(design, r_grid, protocol, scales=wanted.get("scale", ()), drifts=wanted.get("drift", ()),
                          dampings=wanted.get("damping", ()), restitutions=wanted.get("e", ()))
-    # the stroke needs the scene core; at the design point it is always measured (Table 1, row 5)
-    design_point = {**scene_peak_response(design, r_grid, protocol), **sweeps["design"]}
+    # the stroke needs the scene core, so the design point always runs there (Table 1, row 5); a design on the
+    # paper kernel takes its X_m from there, as along its variations
+    on_scene = scene_peak_response(design, r_grid, protocol)
+    design_point = {**on_scene, **peak_response(design, r_grid, protocol)} if on_paper_kernel(design) else on_scene
     data = {f"{m}_design": ((), design_point[m], {"long_name": f"{text}, at the design point", "units": u})
             for m, (text, u) in MEASURES.items()}
     coords = {}
@@ -249,7 +257,7 @@ def design_dataset(design: Design, grids: dict, r_grid, protocol: Protocol, stro
             if all(m in run for run in sweeps[name]):
                 data[f"{m}_vs_{name}"] = (name, [run[m] for run in sweeps[name]], {"long_name": mtext, "units": u})
     if stroke_cap is not None:
-        beta_t, capped = capped_tmd_damping(design, r_grid, protocol, stroke_cap)
+        beta_t, capped = capped_tmd_damping(design, r_grid, protocol, stroke_cap, at=on_scene)
         data["stroke_cap"] = ((), stroke_cap, {"long_name": "the stroke the TMD is held to: half a CID's gap",
                                                "units": "1"})
         data["damping_capped"] = ((), beta_t, {"long_name": "smallest TMD damping ratio whose stroke fits the cap",
@@ -258,7 +266,8 @@ def design_dataset(design: Design, grids: dict, r_grid, protocol: Protocol, stro
                                                   "units": "1"})
     ds = xr.Dataset(data, coords=coords)
     if design.kind != "tmd" and grids.get("units"):
-        add_multi_unit(ds, design, grids["units"], r_grid, protocol, grids["members"], grids["seed"])
+        add_multi_unit(ds, design, grids["units"], r_grid, protocol, grids["members"], grids["seed"],
+                       single=on_scene)
     ds.attrs.update({"title": f"Table 1 in numbers: design {design.kind}", "kind": design.kind,
                      "design": str(design.__dict__),
                      "a_max": a_max(design.beta, design.force_ratio), "periods": protocol.periods,
@@ -463,29 +472,37 @@ def random_starts(n: int, gap: float, seed: int, member: int) -> np.ndarray:
     return np.random.default_rng([seed, n, member]).uniform(-0.5 * gap, 0.5 * gap, n)
 
 
-def multi_unit(design: Design, units, r_grid, protocol: Protocol, members: int, seed: int) -> dict:
+def multi_unit(design: Design, units, r_grid, protocol: Protocol, members: int, seed: int,
+               single: dict | None = None) -> dict:
     """X_m of the design split into n units of the same total mass and gap, for each n in ``units``.
 
     'symmetric': every unit at the design's start (identical units that start together move as one);
     'staggered': the units spread evenly from wall to wall; 'ensemble': ``members`` seeded random starts.
+    ``single``: the one unit's scene response at the design's start, if already run (both n = 1 rows).
     """
     if design.kind == "tmd":
         raise ValueError("the multi-unit rows are the impact dampers'")
     out = {"symmetric": [], "staggered": [], "ensemble": []}
     for n in units:
         split = replace(design, units=int(n))
-        out["symmetric"].append(scene_peak_response(split, r_grid, protocol)["X_m"])
-        out["staggered"].append(scene_peak_response(split, r_grid, protocol, unit_starts=(
-            staggered_starts(n, design.gap) if n > 1 else None))["X_m"])
+        if n == 1:  # one unit: the design itself, wherever 'staggered' would spread it
+            single = single or scene_peak_response(split, r_grid, protocol)
+            out["symmetric"].append(single["X_m"])
+            out["staggered"].append(single["X_m"])
+        else:
+            out["symmetric"].append(scene_peak_response(split, r_grid, protocol)["X_m"])
+            out["staggered"].append(scene_peak_response(split, r_grid, protocol,
+                                                        unit_starts=staggered_starts(n, design.gap))["X_m"])
         out["ensemble"].append([scene_peak_response(split, r_grid, protocol,
                                                     unit_starts=random_starts(n, design.gap, seed, m))["X_m"]
                                 for m in range(members)])
     return out
 
 
-def add_multi_unit(ds, design: Design, units, r_grid, protocol: Protocol, members: int, seed: int) -> None:
+def add_multi_unit(ds, design: Design, units, r_grid, protocol: Protocol, members: int, seed: int,
+                   single: dict | None = None) -> None:
     """The multi-unit rows as variables over ``units`` (and ``member`` for the ensemble)."""
-    rows = multi_unit(design, units, r_grid, protocol, members, seed)
+    rows = multi_unit(design, units, r_grid, protocol, members, seed, single)
     ds.coords["units"] = ("units", np.asarray(units, dtype=np.int64), {
         "long_name": "number of identical units (same total mass and gap)", "units": "1"})
     ds.coords["member"] = ("member", np.arange(members), {"long_name": "ensemble member (seeded starts)",
