@@ -204,6 +204,45 @@ def cmd_sweep(args) -> dict:
     return out
 
 
+def cmd_design(args) -> dict:
+    """The smallest damper on the charts that meets --target-xm, checked by one direct simulation."""
+    from .design import KINDS, DesignError, design, load_charts
+
+    charts = load_charts(args.charts, (args.damper,) if args.damper else KINDS)
+    try:
+        answer = design(charts, args.target_xm, amplitude_range=args.amplitude_range, refinement=args.refinement)
+    except DesignError as exc:
+        print(f"impact design: {exc}", file=sys.stderr)
+        raise SystemExit(2) from None
+    if not args.json:
+        print(_design_text(answer))
+        return None
+    return answer
+
+
+def _design_text(a: dict) -> str:
+    """The answer as a person reads it, with the `impact sweep` flags that rerun it."""
+    if a["damper"] == "tmd":
+        what = f"TMD, mu = {a['mu']:g}, tuning f = {a['tuning']:.4f}, damping beta_t = {a['damping']:.4f}"
+        again = ""
+    else:
+        flags = {"damper": a["damper"], "mu": a["mu"], "e": a["e"], "gap-ratio": a["gap_ratio"], "rp": a.get("rp")}
+        what = ", ".join(f"{k} = {v:g}" for k, v in (("mu", a["mu"]), ("g", a["gap_ratio"]), ("e", a["e"]),
+                                                      ("r'", a.get("rp"))) if v is not None)
+        what = f"{a['damper'].upper()}, {what}"
+        again = "\n  rerun it:  impact sweep " + " ".join(f"--{k} {v}" for k, v in flags.items() if v is not None)
+    lines = [f"{what}", f"  X_m {a['xm_chart']:.4f} on the chart, {a['xm_simulated']:.4f} simulated "
+             f"(target {a['target_xm']:g}, margin {a['margin_simulated']:.4f})"]
+    if "xm_chart_range" in a:
+        lines.append(f"  over force scales {a['amplitude_range'][0]:g} to {a['amplitude_range'][1]:g}: worst X_m "
+                     f"{a['xm_chart_range']:.4f} on the chart (at scale {a['worst_scale']:.3g})"
+                     + (f", {a['xm_simulated_range']:.4f} simulated" if "xm_simulated_range" in a else ""))
+    if a["rejected"]:
+        lines.append(f"  {len(a['rejected'])} lighter chart design(s) failed their direct simulation")
+    lines.append(f"  for {a['design_point']}")
+    return "\n".join(lines) + again
+
+
 def cmd_masri(args) -> dict:
     from .masri import masri_2eipc
     from .params import a_max
@@ -287,6 +326,20 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--out", default=None, help="write the sweep as a netCDF dataset to this path")
     sw.set_defaults(func=cmd_sweep)
 
+    ds = sub.add_parser("design", help="the smallest damper on the design charts that meets a target X_m")
+    ds.add_argument("--target-xm", type=_ranged(0, 100, lo_open=True), required=True,
+                    help="largest acceptable X_m = x_max / A_max, in (0, 100]")
+    ds.add_argument("--damper", choices=("cid", "pid", "tmd"), default=None,
+                    help="the damper type (default: the lightest of the three)")
+    ds.add_argument("--amplitude-range", type=_ranged(0, 1e3, lo_open=True), nargs=2, metavar=("LO", "HI"),
+                    default=None, help="also meet the target for force amplitudes LO to HI times the design "
+                                       "force (LO <= 1 <= HI), the physical gap as designed")
+    ds.add_argument("--charts", default="results/design", help="directory of the chart datasets chart_<damper>.nc")
+    ds.add_argument("--refinement", type=_ranged(1, 100, kind=int), default=5,
+                    help="the direct check's frequency grid is this many times finer than the chart's, in [1, 100]")
+    ds.add_argument("--json", action="store_true", help="print one JSON object instead of text")
+    ds.set_defaults(func=cmd_design)
+
     ms = sub.add_parser("masri", help="Masri's closed-form 2-EIPC steady state and its stability (masri.md)")
     ms.add_argument("--mu", type=_ranged(0, 10, lo_open=True), default=DEFAULTS["mu"], help="mass ratio, in (0, 10]")
     ms.add_argument("--e", type=_ranged(0, 1, lo_open=True), default=DEFAULTS["e"], help="restitution, in (0, 1]")
@@ -319,6 +372,8 @@ def main(argv=None) -> int:
         if not isinstance(exc, RecordError):
             raise
         ap.error(str(exc))
+    if out is None:  # the command printed its own text
+        return 0
     try:
         json.dump(_finite(out), sys.stdout, indent=1)
         sys.stdout.write("\n")

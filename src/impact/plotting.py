@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import matplotlib
@@ -324,3 +325,72 @@ def _plot_units(ax, designs: dict, colors) -> None:
     ax.set_title("solid: units start together; dashed: staggered; band: random starts", fontsize=8)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
+
+
+XM_LEVELS = [0.0, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5, 0.7, 1.0, 1.5]
+
+
+def _cell_edges(centres) -> np.ndarray:
+    """Edges of cells centred on the grid's values (a single value gets a cell of 10 % of itself)."""
+    c = np.asarray(centres, dtype=float)
+    if len(c) == 1:
+        half = 0.05 * (abs(c[0]) or 1.0)
+        return np.array([c[0] - half, c[0] + half])
+    mid = 0.5 * (c[1:] + c[:-1])
+    return np.concatenate(([2 * c[0] - mid[0]], mid, [2 * c[-1] - mid[-1]]))
+
+
+def _chart_panel(ax, x, y, values, norm, title: str, xlabel: str, ylabel: str):
+    """X_m on a chart's grid as coloured cells (no interpolation between runs), with contour lines."""
+    mesh = ax.pcolormesh(_cell_edges(x), _cell_edges(y), values, shading="flat", cmap="viridis_r", norm=norm)
+    if min(values.shape) >= 2:
+        lines = ax.contour(x, y, values, levels=XM_LEVELS[1:], colors="k", linewidths=0.5)
+        ax.clabel(lines, fontsize=6, fmt="%g")
+    ax.set_title(title, fontsize=9)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    return mesh
+
+
+def plot_design_charts(charts: dict, outputs) -> None:
+    """The design charts: the CID's X_m over (mu, g) and the PID's at its best g over (mu, r'), per e;
+    beside them X_m at each damper's best design and the best gap ratio against mu."""
+    from matplotlib.colors import BoundaryNorm
+
+    cid, pid, tmd = charts["cid"], charts["pid"], charts["tmd"]
+    es = cid["e"].values
+    norm = BoundaryNorm(XM_LEVELS, plt.get_cmap("viridis_r").N, extend="max")
+    fig, axes = plt.subplots(2, len(es) + 1, figsize=(4.2 * (len(es) + 1), 8.0), squeeze=False,
+                             layout="constrained")
+    for j, e in enumerate(es):
+        c = cid.sel(e=e)
+        mesh = _chart_panel(axes[0, j], c["mu"].values, c["gap_ratio"].values, c["X_m"].values.T, norm,
+                            f"CID, e = {e:g}: X_m (worst start)", "mass ratio mu", "gap ratio g")
+        axes[0, j].plot(c["mu"].values, c["gap_ratio_best"].values, "w*-", ms=6, lw=0.8)
+        p = pid.sel(e=e)
+        _chart_panel(axes[1, j], p["mu"].values, p["rp"].values, p["X_m_best"].values.T, norm,
+                     f"PID, e = {e:g}: X_m at its best g", "mass ratio mu", "tuning r'")
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    best, gaps = axes[0, -1], axes[1, -1]
+    for j, e in enumerate(es):
+        color = colors[j % len(colors)]
+        best.plot(cid["mu"].values, cid["X_m_best"].sel(e=e).values, "o-", color=color, ms=3, label=f"CID e={e:g}")
+        p = pid.sel(e=e)
+        k = p["X_m_best"].argmin("rp")
+        best.plot(p["mu"].values, p["X_m_best"].min("rp").values, "s--", color=color, ms=3,
+                  label=f"PID e={e:g} (best r')")
+        gaps.plot(cid["mu"].values, cid["gap_ratio_best"].sel(e=e).values, "o-", color=color, ms=3,
+                  label=f"CID e={e:g}")
+        gaps.plot(p["mu"].values, p["gap_ratio_best"].isel(rp=k).values, "s--", color=color, ms=3,
+                  label=f"PID e={e:g}")
+    best.plot(tmd["mu"].values, tmd["X_m"].values, "k-", lw=1.5, label="TMD (equal-peak optimum)")
+    best.set(xlabel="mass ratio mu", ylabel="X_m at the best design", title="each damper at its best")
+    gaps.set(xlabel="mass ratio mu", ylabel="best gap ratio g", title="the gap of each best design")
+    for ax in (best, gaps):
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=6)
+    fig.colorbar(mesh, ax=axes[:, :-1], shrink=0.8, label="X_m = x_max / A_max")
+    fig.suptitle(textwrap.fill(f"Design charts for {cid.attrs['design_point']}", 140), fontsize=9)
+    for out in outputs:
+        save_atomic(fig, out)
+    plt.close(fig)

@@ -12,6 +12,7 @@ from impact.experiment.grid import SCHEMA_PATH as RIG_SCHEMA
 from impact.experiment.grid import study_cases, validation_config
 from impact.numerics import stability_families, work_precision_pieces
 from impact.provenance import git_state
+from impact.design import IMPACT_KINDS, chart_specs
 from impact.robustness import design_names
 from impact.study import all_curves, check_config, curve_id, figure_curves, friction_scale
 
@@ -35,6 +36,7 @@ SECTIONS = {
     "coexistence": "5. Initial conditions and coexisting states",
     "numerics": "6. Numerics",
     "robustness": "7. Table 1 in numbers",
+    "design": "8. Design charts",
 }
 
 
@@ -70,6 +72,7 @@ LIB_SCENE = LIB_CORE + library(
     "scene.py", "building.py", "records.py", "core/contact.py", "core/modal.py", "core/run.py"
 )
 LIB_ROBUSTNESS = LIB_SCENE + library("robustness.py", "study.py")
+LIB_DESIGN = library("design.py", "tmd.py", "params.py", "pipeline.py", "io.py", "provenance.py")
 LIB_PLOT = library("plotting.py", "study.py", "pipeline.py", "io.py")
 LIB_TABLE = library("comparison.py", "study.py", "pipeline.py", "io.py")
 LIB_NUMERICS = LIB_CORE + library(
@@ -120,6 +123,10 @@ if VALIDATION:
 # Table 1 in numbers: its designs, and the sweeps their optimum gaps come from
 ROBUSTNESS = "robustness" in config
 ROBUSTNESS_DESIGNS = design_names(config) if ROBUSTNESS else []
+# design charts: the sweeps they read, per damper
+DESIGN = config.get("design")
+DESIGN_KINDS = ["cid", "pid", "tmd"] if DESIGN else []
+DESIGN_CURVES = {kind: {curve_id(s): s for s in chart_specs(DESIGN, kind)} for kind in IMPACT_KINDS} if DESIGN else {}
 COEXISTENCE_CURVES = config.get("coexistence", {}).get("curves", [])
 COEXISTENCE_MODES = config.get("coexistence", {}).get("modes", ["continuation_up", "continuation_down"])
 
@@ -174,3 +181,14 @@ def robustness_sweeps(wildcards):
 def robustness_params(wildcards):
     """Only what the stage's numbers depend on."""
     return {key: config[key] for key in ("robustness", "structure", "protocol")}
+
+
+def design_curve_params(wildcards):
+    """Only what one chart sweep's numbers depend on."""
+    spec = next(c[wildcards.curve] for c in DESIGN_CURVES.values() if wildcards.curve in c)
+    return {"structure": config["structure"], "protocol": config["protocol"], "design": DESIGN, "spec": spec}
+
+
+def design_chart_sweeps(wildcards):
+    """The sweeps one damper's chart reads (none for the TMD's, which is closed form)."""
+    return expand(rules.design_sweep.output[0], curve=list(DESIGN_CURVES.get(wildcards.kind, {})))

@@ -1,0 +1,81 @@
+# Design charts: sweeps on the charts' frequency window -> one chart per damper
+# (results/design/chart_<damper>.nc, which `impact design` reads) -> the figure.
+
+
+rule design_sweep:
+    input:
+        library=LIB_SWEEP + LIB_DESIGN,
+    output:
+        "results/design/sweeps/{curve}.nc",
+    log:
+        "results/logs/design_sweep/{curve}.log",
+    benchmark:
+        "results/benchmarks/design_sweep/{curve}.tsv"
+    wildcard_constraints:
+        curve="(cid|pid)_[A-Za-z0-9_.]+",
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=30,
+        mem_mb=1000,
+    params:
+        study=design_curve_params,
+    script:
+        "../scripts/design_sweep.py"
+
+
+rule design_chart:
+    input:
+        sweeps=design_chart_sweeps,
+        library=LIB_DESIGN,
+    output:
+        "results/design/chart_{kind}.nc",
+    log:
+        "results/logs/design_chart/{kind}.log",
+    benchmark:
+        "results/benchmarks/design_chart/{kind}.tsv"
+    wildcard_constraints:
+        kind="cid|pid|tmd",
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=10,
+        mem_mb=1000,
+    params:
+        study=lambda wildcards: {key: config[key] for key in ("structure", "protocol", "design")},
+    script:
+        "../scripts/design_chart.py"
+
+
+rule design_figure:
+    input:
+        charts=expand(rules.design_chart.output[0], kind=DESIGN_KINDS),
+        library=LIB_DESIGN + LIB_PLOT,
+    output:
+        png=report(
+            "results/figures/design_charts.png",
+            caption="../report/design_charts.rst",
+            category=SECTIONS["design"],
+            subcategory="X_m charts for choosing mass, gap and tuning",
+        ),
+        pdf="results/figures/design_charts.pdf",
+    log:
+        "results/logs/design_figure.log",
+    benchmark:
+        "results/benchmarks/design_figure.tsv"
+    conda:
+        ENV
+    threads: 1
+    resources:
+        runtime=5,
+        mem_mb=1000,
+    script:
+        "../scripts/design_figure.py"
+
+
+if DESIGN:
+    register(rules.design_sweep, curve=[c for kind in DESIGN_CURVES.values() for c in kind])
+    register(rules.design_chart, kind=DESIGN_KINDS)
+    register(rules.design_figure, report=("png",))

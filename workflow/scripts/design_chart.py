@@ -1,0 +1,18 @@
+"""Glue: one damper's chart sweeps (or the TMD's closed form) -> results/design/chart_<damper>.nc."""
+import xarray as xr
+
+from impact.design import chart_config, impact_chart, tmd_chart, tmd_mu_grid
+from impact.io import write_dataset
+from impact.pipeline import logged
+from impact.study import freq_grid
+
+with logged(snakemake.log[0]) as log:
+    study, kind = snakemake.params.study, snakemake.wildcards.kind
+    if kind == "tmd":
+        structure = study["structure"]
+        chart = tmd_chart(tmd_mu_grid(study["design"]), structure["beta"], structure["force_ratio"],
+                          study["protocol"], freq_grid(chart_config(study)))
+    else:
+        chart = impact_chart(kind, [xr.load_dataset(p) for p in snakemake.input.sweeps])
+    log.info("%s chart: X_m %.4f to %.4f", kind, float(chart["X_m"].min()), float(chart["X_m"].max()))
+    write_dataset(chart, snakemake.output[0])

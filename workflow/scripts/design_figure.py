@@ -1,0 +1,11 @@
+"""Glue: the charts -> results/figures/design_charts.png/.pdf."""
+from pathlib import Path
+
+import xarray as xr
+
+from impact.pipeline import logged
+from impact.plotting import plot_design_charts
+
+with logged(snakemake.log[0]):
+    charts = {Path(p).stem.removeprefix("chart_"): xr.load_dataset(p) for p in snakemake.input.charts}
+    plot_design_charts(charts, [snakemake.output.png, snakemake.output.pdf])
