@@ -394,3 +394,64 @@ def plot_design_charts(charts: dict, outputs) -> None:
     for out in outputs:
         save_atomic(fig, out)
     plt.close(fig)
+
+
+LOAD_COLUMNS = (("records", None, "the four records (mean)"), ("kanai_tajimi", "firm", "Kanai-Tajimi, firm (mean)"),
+                ("kanai_tajimi", "soft", "Kanai-Tajimi, soft (mean)"))
+DAMPER_COLORS = {"cid": "C0", "pid": "C1", "tmd": "C2"}
+
+
+def plot_loads_reduction(datasets: dict, outputs) -> None:
+    """Peak roof displacement over the bare building's against PGA: one row per building, one column per
+    load group (records, Kanai-Tajimi per soil), one line per damper and mass ratio."""
+    columns = [(f, soil, title) for f, soil, title in LOAD_COLUMNS
+               if f in datasets and (soil is None or soil in datasets[f]["soil"].values)]
+    names = list(datasets[columns[0][0]]["building"].values)
+    fig, axes = plt.subplots(len(names), len(columns), figsize=(4.0 * len(columns), 2.3 * len(names)),
+                             squeeze=False, sharex=True, layout="constrained")
+    for j, (family, soil, title) in enumerate(columns):
+        ds = datasets[family] if soil is None else datasets[family].sel(soil=soil)
+        ratio = ds["peak_roof_ratio"].mean("record" if family == "records" else "seed")
+        for i, building in enumerate(names):
+            ax = axes[i, j]
+            for damper in ratio["damper"].values:
+                for k, mr in enumerate(ratio["mass_ratio"].values):
+                    ax.plot(ratio["intensity"].values, ratio.sel(building=building, damper=damper, mass_ratio=mr),
+                            "o-" if k == len(ratio["mass_ratio"]) - 1 else "s--", ms=3, lw=1.0,
+                            color=DAMPER_COLORS[str(damper)], label=f"{str(damper).upper()} {mr:g}")
+            ax.axhline(1.0, color="k", lw=0.6)
+            ax.set_title(f"{building}: {title}", fontsize=8)
+            ax.grid(alpha=0.3)
+            if j == 0:
+                ax.set_ylabel("peak roof / bare")
+            if i == len(names) - 1:
+                ax.set_xlabel("PGA (g)")
+    axes[0, 0].legend(fontsize=6, ncol=2)
+    fig.suptitle("Peak roof displacement with each damper over the bare building's (below 1: it helps)",
+                 fontsize=10)
+    for out in outputs:
+        save_atomic(fig, out)
+    plt.close(fig)
+
+
+def plot_loads_time_history(ds, outputs) -> None:
+    """The roof with and without the damper, and the damper's stroke between its walls, impacts marked."""
+    t = ds["t"].values
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(11.0, 6.0), sharex=True, layout="constrained")
+    top.plot(t, ds["roof_bare"].values * 100, color="0.5", lw=0.8, label="bare")
+    top.plot(t, ds["roof_damped"].values * 100, color="C0", lw=0.8, label=f"with the {ds.attrs['damper'].upper()}")
+    top.set_ylabel("roof displacement (cm)")
+    top.legend(fontsize=8)
+    half = float(ds["half_gap"]) * 100
+    bottom.plot(t, ds["stroke"].values * 100, color="C1", lw=0.8, label="damper mass relative to the roof")
+    for wall in (-half, half):
+        bottom.axhline(wall, color="k", lw=0.6, ls="--")
+    impacts = ds["impact_time"].values
+    bottom.plot(impacts, np.interp(impacts, t, ds["stroke"].values * 100), "k|", ms=8, label="impacts")
+    bottom.set_ylabel("stroke (cm)")
+    bottom.set_xlabel("time (s)")
+    bottom.legend(fontsize=8)
+    fig.suptitle(ds.attrs["title"], fontsize=9)
+    for out in outputs:
+        save_atomic(fig, out)
+    plt.close(fig)

@@ -12,6 +12,7 @@ from impact.experiment.grid import SCHEMA_PATH as RIG_SCHEMA
 from impact.experiment.grid import study_cases, validation_config
 from impact.numerics import stability_families, work_precision_pieces
 from impact.provenance import git_state
+from impact import loads
 from impact.design import IMPACT_KINDS, chart_specs
 from impact.robustness import design_names
 from impact.study import all_curves, check_config, curve_id, figure_curves, friction_scale
@@ -37,6 +38,7 @@ SECTIONS = {
     "numerics": "6. Numerics",
     "robustness": "7. Table 1 in numbers",
     "design": "8. Design charts",
+    "loads": "9. Earthquakes and wind on real buildings",
 }
 
 
@@ -73,6 +75,7 @@ LIB_SCENE = LIB_CORE + library(
 )
 LIB_ROBUSTNESS = LIB_SCENE + library("robustness.py", "study.py")
 LIB_DESIGN = library("design.py", "tmd.py", "params.py", "pipeline.py", "io.py", "provenance.py")
+LIB_LOADS = LIB_SCENE + library("loads.py", "tmd.py")
 LIB_PLOT = library("plotting.py", "study.py", "pipeline.py", "io.py")
 LIB_TABLE = library("comparison.py", "study.py", "pipeline.py", "io.py")
 LIB_NUMERICS = LIB_CORE + library(
@@ -127,6 +130,12 @@ ROBUSTNESS_DESIGNS = design_names(config) if ROBUSTNESS else []
 DESIGN = config.get("design")
 DESIGN_KINDS = ["cid", "pid", "tmd"] if DESIGN else []
 DESIGN_CURVES = {kind: {curve_id(s): s for s in chart_specs(DESIGN, kind)} for kind in IMPACT_KINDS} if DESIGN else {}
+# the earthquake and wind study: its buildings, dampers and load families
+LOADS = config.get("loads")
+if LOADS:
+    loads.check_config(LOADS)
+LOADS_BUILDINGS = list(loads.buildings(LOADS)) if LOADS else []
+LOADS_FAMILIES = loads.families(LOADS) if LOADS else []
 COEXISTENCE_CURVES = config.get("coexistence", {}).get("curves", [])
 COEXISTENCE_MODES = config.get("coexistence", {}).get("modes", ["continuation_up", "continuation_down"])
 

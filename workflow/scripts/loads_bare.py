@@ -1,0 +1,11 @@
+"""Glue: one building, bare, under every load of the stage -> results/loads/runs/<building>/bare.nc."""
+from impact.io import write_dataset
+from impact.loads import bare_runs
+from impact.pipeline import log_versions, logged
+
+with logged(snakemake.log[0]) as log:
+    log_versions()
+    ds = bare_runs(snakemake.params.study, snakemake.wildcards.building)
+    log.info("%s bare: peak roof %.4g m under records (largest)", snakemake.wildcards.building,
+             float(ds["records_peak_roof"].max()))
+    write_dataset(ds, snakemake.output[0])

@@ -1,0 +1,14 @@
+"""Glue: one damper type on one building -> results/loads/runs/<building>/<damper>.nc."""
+import xarray as xr
+
+from impact.io import write_dataset
+from impact.loads import damper_runs
+from impact.pipeline import log_versions, logged
+
+with logged(snakemake.log[0]) as log:
+    log_versions()
+    wc = snakemake.wildcards
+    ds = damper_runs(snakemake.params.study, wc.building, wc.damper, xr.load_dataset(snakemake.input.bare))
+    log.info("%s %s: mean peak roof ratio under the records %.3f", wc.building, wc.damper,
+             float(ds["records_peak_roof_ratio"].mean()))
+    write_dataset(ds, snakemake.output[0])
