@@ -36,12 +36,9 @@ from .tmd import den_hartog
 
 KINDS = ("cid", "pid", "tmd")
 FAMILIES = ("records", "kanai_tajimi", "wind")
-RESPONSES = {
-    "peak_roof": ("peak roof displacement", "peak_roof_displacement"),
-    "rms_roof": ("RMS roof displacement", "rms_roof_displacement"),
-    "peak_accel": ("peak absolute roof acceleration", "peak_roof_acceleration"),
-    "peak_drift": ("peak inter-storey drift", "peak_interstorey_drift"),
-}
+# the responses judged against the bare building: measure -> the SceneResult attribute
+RESPONSES = {"peak_roof": "peak_roof_displacement", "rms_roof": "rms_roof_displacement",
+             "peak_accel": "peak_roof_acceleration", "peak_drift": "peak_interstorey_drift"}
 IMPACT_RECORDS = 50_000   # impacts whose momentum is kept per run (more are counted, not kept)
 SAME = 0.05               # a ratio within 5 % of 1: the damper "does nothing"
 
@@ -142,7 +139,7 @@ def run(building: Building, dampers: tuple, load: Load) -> dict:
     """The measures of one scene run (SI units)."""
     res = simulate_scene(Scene(building, dampers, load.load, duration=load.duration),
                          record=IMPACT_RECORDS if dampers and dampers[0].has_walls else 0)
-    out = {key: getattr(res, attr) for key, (_, attr) in RESPONSES.items()}
+    out = {key: getattr(res, attr) for key, attr in RESPONSES.items()}
     out["stroke"] = float(np.max(res.peak_strokes)) if len(res.peak_strokes) else math.nan
     out["impacts"] = res.impacts
     impulses = np.abs(res.records["impulse"]) if res.records is not None else np.zeros(0)
@@ -304,7 +301,7 @@ def _at_design(ds: xr.Dataset, bare: xr.Dataset, kind: str) -> xr.Dataset:
             key = name.removeprefix(family + "_")
             if key in RESPONSES:
                 out[f"{name}_ratio"] = (part[name] / bare[name]).assign_attrs(
-                    long_name=f"{RESPONSES[key][0]} over the bare building's, {family} loads", units="1")
+                    long_name=f"{MEASURES[key][0]} over the bare building's, {family} loads", units="1")
     return xr.Dataset(out)
 
 
