@@ -164,4 +164,18 @@ def test_the_multi_unit_verdict_is_withheld_where_a_run_failed():
                      "X_m_units_staggered": ("units", [0.30, np.nan]),
                      "X_m_units_ensemble": (("units", "member"), [[0.3], [0.3]])}, coords={"units": [1, 9]})
     change, holds = same_level(ds)
-    assert math.isnan(change) and holds is None
+    assert change == 0.0 and holds is None
+
+
+def test_a_defined_change_beyond_the_band_refutes_the_claim_despite_a_failed_run():
+    """'Up to 9 units give the same level' is a claim about every n: one defined counterexample refutes it."""
+    ds = xr.Dataset({"X_m_units_symmetric": ("units", [0.30, 0.30, 0.30]),
+                     "X_m_units_staggered": ("units", [0.30, 0.36, np.nan]),
+                     "X_m_units_ensemble": (("units", "member"), [[0.3], [0.3], [np.nan]])},
+                    coords={"units": [1, 2, 9]})
+    change, holds = same_level(ds)
+    assert change == pytest.approx(0.2) and holds is False
+    from impact.robustness import _multi_unit_row
+
+    row = _multi_unit_row("cid_left", ds.assign_attrs(kind="cid"))
+    assert row["supports"] == "no" and "n = 9" in row["note"] and "refutes" in row["note"]

@@ -352,9 +352,24 @@ def _multi_unit_row(name: str, ds) -> dict:
             f"(same, staggered, ensemble median) against its own one-unit value, n = {', '.join(map(str, n))}",
             "number": change, "supports": {True: "yes", False: "no", None: "not judged"}[holds],
             "band_lo": math.nan, "band_hi": math.nan,
-            "note": f"'same level' read as within {SAME_LEVEL:.0%}" if holds is not None else
-            "X_m undefined for some n: a run of the split damper stopped at the event cap (the units' grazing "
-            "contacts accumulate), so the claim is not judged"}
+            "note": _multi_unit_note(ds, holds)}
+
+
+def _multi_unit_note(ds, holds: bool | None) -> str:
+    undefined = [int(n) for n, ok in zip(ds["units"].values, _all_defined(ds)) if not ok]
+    if not undefined:
+        return f"'same level' read as within {SAME_LEVEL:.0%}"
+    capped = (f"X_m undefined for n = {', '.join(map(str, undefined))}: a run of the split damper stopped at "
+              "the event cap (the units' grazing contacts accumulate)")
+    if holds is False:
+        return f"{capped}; the defined n already move X_m beyond {SAME_LEVEL:.0%}, which refutes the claim"
+    return f"{capped}, so the claim is not judged"
+
+
+def _all_defined(ds) -> np.ndarray:
+    """Per number of units: whether every X_m of it (together, staggered, every ensemble member) is defined."""
+    return (np.isfinite(ds["X_m_units_symmetric"].values) & np.isfinite(ds["X_m_units_staggered"].values)
+            & np.all(np.isfinite(ds["X_m_units_ensemble"].values), axis=1))
 
 
 def _band(ds, row: int) -> tuple[float, float]:
@@ -520,12 +535,16 @@ def same_level(ds) -> tuple[float, bool | None]:
     """The largest relative change of X_m from one unit to n, each kind of start against its own single-unit
     value (the ensemble by its median), and whether it stays within SAME_LEVEL.
 
-    (NaN, None) when an X_m is undefined: a run of the split damper stopped at the event cap.
+    Where some X_m is undefined (a run of the split damper stopped at the event cap), the claim is still
+    refuted by any defined change beyond SAME_LEVEL (it is a claim about every n up to 9); otherwise the
+    verdict is withheld: (largest defined change or NaN, None).
     """
     curves = [ds["X_m_units_symmetric"].values, ds["X_m_units_staggered"].values,
               np.median(ds["X_m_units_ensemble"].values, axis=1)]
-    if not all(np.all(np.isfinite(c)) for c in curves):
-        return math.nan, None
     one = list(ds["units"].values).index(1)
-    change = float(max(np.max(np.abs(c / c[one] - 1.0)) for c in curves))
+    changes = np.concatenate([np.abs(c / c[one] - 1.0) for c in curves])
+    defined = changes[np.isfinite(changes)]
+    change = float(np.max(defined)) if defined.size else math.nan
+    if defined.size < changes.size:
+        return (change, False) if change > SAME_LEVEL else (change, None)
     return change, change <= SAME_LEVEL
