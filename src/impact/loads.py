@@ -11,7 +11,8 @@ Each damper sits on the roof with a mass that is a fraction of the building's to
 * the TMD tuned to the first mode by Den Hartog's rules, with its mass ratio taken over the first mode's
   modal mass (mode shape 1 at the roof).
 
-Every measure of a damped run is divided by the bare building's under the same load: peak and RMS roof
+A ground-motion run lasts the record's length (the peaks come in the strong phase), a wind run its own
+duration.  Every measure of a damped run is divided by the bare building's under the same load: peak and RMS roof
 displacement, peak absolute roof acceleration, peak inter-storey drift.  Beside them the damper's stroke, its
 impact count and the momentum it exchanges per impact.
 
@@ -123,12 +124,6 @@ def wind_loads(cfg: dict, building: Building) -> list[Load]:
         out.append(Load("wind", {"seed": seed}, ForceRecord(values, dt, building.masses.copy(), name=f"wind-{seed}"),
                         duration))
     return out
-
-
-def design_level(loads: list[Load], cfg: dict) -> list[Load]:
-    """The loads at the design intensity (all wind loads: they have one)."""
-    pga = cfg["records"]["design_pga_g"]
-    return [ld for ld in loads if ld.labels.get("intensity", pga) == pga]
 
 
 # ----------------------------------------------------------------------------
