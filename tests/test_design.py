@@ -76,9 +76,15 @@ def test_design_read_off_a_chart_meets_the_target_by_direct_simulation(chart_dir
     for start in answer["starts"]:
         assert main(["sweep", "--damper", "cid", "--mu", str(answer["mu"]), "--e", str(answer["e"]),
                      "--gap-ratio", str(answer["gap_ratio"]), "--start", start, "--periods", "100",
-                     "--average-from", "50", "--r-min", "0.96", "--r-max", "1.04", "--r-step", str(step)]) == 0
+                     "--average-from", "50", "--r-min", str(answer["r_min"]), "--r-max", str(answer["r_max"]),
+                     "--r-step", str(step)]) == 0
         per_start.append(json.loads(capsys.readouterr().out)["X_m"])
     assert max(per_start) == pytest.approx(answer["xm_simulated"], rel=1e-12)
+    # without --json: the same design as text, with the sweep that reruns it
+    assert main(["design", "--target-xm", str(target), "--damper", "cid", "--charts", str(chart_dir)]) == 0
+    text = capsys.readouterr().out
+    assert f"--mu {answer['mu']} --e {answer['e']} --gap-ratio {answer['gap_ratio']}" in text
+    assert f"{answer['xm_simulated']:.4f} simulated" in text
 
 
 def test_pid_and_tmd_answers_carry_their_tuning(chart_dir, capsys):

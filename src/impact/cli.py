@@ -1,6 +1,7 @@
 """Command-line entry point `impact`: try a case without Snakemake.
 
-Each sub-command prints one JSON object on stdout.  Flags are named after the
+Each sub-command prints one JSON object on stdout (`impact design` prints text unless
+--json).  Flags are named after the
 model's symbols (model.md); a value out of range is refused with a message
 naming the flag and exit status 2.
 """
@@ -204,7 +205,7 @@ def cmd_sweep(args) -> dict:
     return out
 
 
-def cmd_design(args) -> dict:
+def cmd_design(args) -> dict | str:
     """The smallest damper on the charts that meets --target-xm, checked by one direct simulation."""
     from .design import KINDS, DesignError, design, load_charts
 
@@ -214,10 +215,7 @@ def cmd_design(args) -> dict:
     except DesignError as exc:
         print(f"impact design: {exc}", file=sys.stderr)
         raise SystemExit(2) from None
-    if not args.json:
-        print(_design_text(answer))
-        return None
-    return answer
+    return answer if args.json else _design_text(answer)
 
 
 def _design_text(a: dict) -> str:
@@ -226,11 +224,13 @@ def _design_text(a: dict) -> str:
         what = f"TMD, mu = {a['mu']:g}, tuning f = {a['tuning']:.4f}, damping beta_t = {a['damping']:.4f}"
         again = ""
     else:
-        flags = {"damper": a["damper"], "mu": a["mu"], "e": a["e"], "gap-ratio": a["gap_ratio"], "rp": a.get("rp")}
+        flags = {"damper": a["damper"], "mu": a["mu"], "e": a["e"], "gap-ratio": a["gap_ratio"], "rp": a.get("rp"),
+                 "r-min": a["r_min"], "r-max": a["r_max"]}
         what = ", ".join(f"{k} = {v:g}" for k, v in (("mu", a["mu"]), ("g", a["gap_ratio"]), ("e", a["e"]),
                                                       ("r'", a.get("rp"))) if v is not None)
         what = f"{a['damper'].upper()}, {what}"
-        again = "\n  rerun it:  impact sweep " + " ".join(f"--{k} {v}" for k, v in flags.items() if v is not None)
+        again = ("\n  rerun it:  impact sweep " + " ".join(f"--{k} {v}" for k, v in flags.items() if v is not None)
+                 + f"  (one start per sweep: --start {' or '.join(a['starts'])})")
     lines = [f"{what}", f"  X_m {a['xm_chart']:.4f} on the chart, {a['xm_simulated']:.4f} simulated "
              f"(target {a['target_xm']:g}, margin {a['margin_simulated']:.4f})"]
     if "xm_chart_range" in a:
@@ -372,11 +372,12 @@ def main(argv=None) -> int:
         if not isinstance(exc, RecordError):
             raise
         ap.error(str(exc))
-    if out is None:  # the command printed its own text
-        return 0
     try:
-        json.dump(_finite(out), sys.stdout, indent=1)
-        sys.stdout.write("\n")
+        if isinstance(out, str):  # a command's text for a person (impact design without --json)
+            sys.stdout.write(out + "\n")
+        else:
+            json.dump(_finite(out), sys.stdout, indent=1)
+            sys.stdout.write("\n")
         sys.stdout.flush()
     except BrokenPipeError:
         # the reader stopped early (impact ... | head): not an error, and no traceback

@@ -347,6 +347,7 @@ def _answer(cand: Candidate, chart, target: float, simulated: float, amplitude_r
         out.update(tuning=p["tuning"], damping=p["damping"])
     else:
         out["starts"] = [str(s) for s in chart["start"].values]
+        out.update(r_min=chart.attrs["freq_min"], r_max=chart.attrs["freq_max"])  # `impact sweep`'s --r-min/--r-max
         out["check"] = (f"every start, r = {chart.attrs['freq_min']:g} to {chart.attrs['freq_max']:g} "
                         "in steps finer than the chart's")
     if amplitude_range is not None:
