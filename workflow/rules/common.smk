@@ -13,7 +13,7 @@ from impact.experiment.grid import study_cases, validation_config
 from impact.numerics import stability_families, work_precision_pieces
 from impact.provenance import git_state
 from impact import loads
-from impact.design import IMPACT_KINDS, chart_specs
+from impact.design import IMPACT_KINDS, KINDS as DAMPER_KINDS, chart_specs
 from impact.robustness import design_names
 from impact.study import all_curves, check_config, curve_id, figure_curves, friction_scale
 
@@ -128,7 +128,7 @@ ROBUSTNESS = "robustness" in config
 ROBUSTNESS_DESIGNS = design_names(config) if ROBUSTNESS else []
 # design charts: the sweeps they read, per damper
 DESIGN = config.get("design")
-DESIGN_KINDS = ["cid", "pid", "tmd"] if DESIGN else []
+DESIGN_KINDS = list(DAMPER_KINDS) if DESIGN else []
 DESIGN_CURVES = {kind: {curve_id(s): s for s in chart_specs(DESIGN, kind)} for kind in IMPACT_KINDS} if DESIGN else {}
 # the earthquake and wind study: its buildings, dampers and load families
 LOADS = config.get("loads")
@@ -136,6 +136,7 @@ if LOADS:
     loads.check_config(LOADS)
 LOADS_BUILDINGS = list(loads.buildings(LOADS)) if LOADS else []
 LOADS_FAMILIES = loads.families(LOADS) if LOADS else []
+LOADS_KINDS = list(loads.KINDS)
 COEXISTENCE_CURVES = config.get("coexistence", {}).get("curves", [])
 COEXISTENCE_MODES = config.get("coexistence", {}).get("modes", ["continuation_up", "continuation_down"])
 
@@ -195,7 +196,17 @@ def robustness_params(wildcards):
 def design_curve_params(wildcards):
     """Only what one chart sweep's numbers depend on."""
     spec = next(c[wildcards.curve] for c in DESIGN_CURVES.values() if wildcards.curve in c)
-    return {"structure": config["structure"], "protocol": config["protocol"], "design": DESIGN, "spec": spec}
+    return {
+        "structure": config["structure"],
+        "protocol": config["protocol"],
+        "design": {"freq": DESIGN["freq"]},
+        "spec": spec,
+    }
+
+
+def loads_params(wildcards):
+    """What the stage's runs depend on: the loads section but the one case drawn in time."""
+    return {key: value for key, value in LOADS.items() if key != "time_history"}
 
 
 def design_chart_sweeps(wildcards):

@@ -21,7 +21,7 @@ rule loads_bare:
         runtime=10,
         mem_mb=1000,
     params:
-        study=lambda wildcards: LOADS,
+        study=loads_params,
     script:
         "../scripts/loads_bare.py"
 
@@ -46,7 +46,7 @@ rule loads_damper:
         runtime=20,
         mem_mb=1000,
     params:
-        study=lambda wildcards: LOADS,
+        study=loads_params,
     script:
         "../scripts/loads_damper.py"
 
@@ -54,7 +54,7 @@ rule loads_damper:
 rule loads_collect:
     input:
         bare=expand(rules.loads_bare.output[0], building=LOADS_BUILDINGS),
-        dampers=expand(rules.loads_damper.output[0], building=LOADS_BUILDINGS, damper=["cid", "pid", "tmd"]),
+        dampers=expand(rules.loads_damper.output[0], building=LOADS_BUILDINGS, damper=LOADS_KINDS),
         library=LIB_LOADS,
     output:
         expand("results/loads/{family}.nc", family=LOADS_FAMILIES),
@@ -184,7 +184,7 @@ rule loads_time_history_figure:
 
 if LOADS:
     register(rules.loads_bare, building=LOADS_BUILDINGS)
-    register(rules.loads_damper, building=LOADS_BUILDINGS, damper=["cid", "pid", "tmd"])
+    register(rules.loads_damper, building=LOADS_BUILDINGS, damper=LOADS_KINDS)
     register(rules.loads_collect)
     register(rules.loads_tables, report=("best", "verdicts"))
     register(rules.loads_figure, report=("png",))
