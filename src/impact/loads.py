@@ -238,10 +238,11 @@ def design_peak(bare: xr.Dataset, load: Load, cfg: dict) -> float:
     return float(bare["wind_peak_roof"].median())
 
 
-def _mean_ratio(ds: xr.Dataset, bare: xr.Dataset, family: str) -> xr.DataArray:
-    """The peak roof displacement over the bare building's, averaged over the family's loads."""
+def _best_gap(ds: xr.Dataset, bare: xr.Dataset, family: str) -> xr.DataArray:
+    """Per mass ratio, the swept gap ratio with the lowest peak roof displacement over the bare building's,
+    averaged over the family's loads."""
     ratio = ds[f"{family}_peak_roof"] / bare[f"{family}_peak_roof"]
-    return ratio.mean([d for d in ratio.dims if d not in ("mass_ratio", "gap_ratio")])
+    return ratio.mean([d for d in ratio.dims if d not in ("mass_ratio", "gap_ratio")]).idxmin("gap_ratio")
 
 
 def damper_runs(cfg: dict, building_name: str, kind: str, bare: xr.Dataset) -> xr.Dataset:
@@ -257,8 +258,7 @@ def damper_runs(cfg: dict, building_name: str, kind: str, bare: xr.Dataset) -> x
         swept = [ld for ld in loads if ld.family != "kanai_tajimi"]
         sweep_rows = [row(ld, run(building, (_impact(cfg, kind, building, mr, g, bare, ld),), ld), mass_ratio=mr,
                           gap_ratio=g) for g in cfg["gap_ratios"] for ld in swept]
-        best = float(_mean_ratio(rows_dataset(sweep_rows, ("mass_ratio", "gap_ratio")), bare, "records")
-                     .idxmin("gap_ratio").item())
+        best = float(_best_gap(rows_dataset(sweep_rows, ("mass_ratio", "gap_ratio")), bare, "records").item())
         rows += sweep_rows
         rows += [row(ld, run(building, (_impact(cfg, kind, building, mr, best, bare, ld),), ld), mass_ratio=mr)
                  for ld in loads if ld.family == "kanai_tajimi"]
@@ -284,7 +284,7 @@ def _at_design(ds: xr.Dataset, bare: xr.Dataset, kind: str) -> xr.Dataset:
             out[f"{family}_peak_roof_ratio_vs_gap"] = swept.assign_attrs(
                 long_name=f"peak roof displacement over the bare building's, {family} loads, per gap ratio",
                 units="1")
-            best = _mean_ratio(part, bare, family).idxmin("gap_ratio")
+            best = _best_gap(part, bare, family)
             part = part.sel(gap_ratio=best).drop_vars("gap_ratio")
             out[f"{family}_design_gap_ratio"] = best.assign_attrs(long_name=f"gap ratio of the design, {family} loads",
                                                            units="1")
@@ -315,7 +315,7 @@ def collect(bare: dict, dampers: dict) -> dict:
     bare: building -> its bare dataset; dampers: (building, kind) -> its damper dataset."""
     out = {}
     for family in LABEL_DIMS:
-        per_building, bare_parts = [], []
+        per_building, bare_parts, names = [], [], []
         for name, b in bare.items():
             kinds = [k for k in KINDS if (name, k) in dampers and f"{family}_peak_roof" in dampers[name, k]]
             if not kinds:
@@ -325,9 +325,9 @@ def collect(bare: dict, dampers: dict) -> dict:
                                 .assign_coords(damper=kinds))
             kept = _family(b, family)[[*RESPONSES, "energy_residual"]]
             bare_parts.append(kept.rename({v: f"bare_{v}" for v in kept.data_vars}))
+            names.append(name)
         if not per_building:
             continue
-        names = [n for n in bare if any(f"{family}_peak_roof" in dampers.get((n, k), {}) for k in KINDS)]
         ds = xr.merge([xr.concat(per_building, dim="building", join="outer", coords="minimal", data_vars="all"),
                        xr.concat(bare_parts, dim="building")]).assign_coords(building=names)
         for name in ds.data_vars:
