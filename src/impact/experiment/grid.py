@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import copy
 import functools
+import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -49,6 +50,29 @@ def validation_config(cfg: dict | None = None, *, smoke: bool = False) -> dict[s
     """
     if cfg and set(cfg) == {"validation"}:
         cfg = cfg["validation"]
+    key = _plain_key(cfg, smoke)
+    if key is None:
+        return _filled(cfg, smoke)
+    return copy.deepcopy(_filled_once(key))  # a fresh dict every call: callers may change theirs
+
+
+def _plain_key(cfg, smoke: bool) -> str | None:
+    """``cfg`` as canonical JSON when JSON gives it back unchanged (no tuples, arrays or NaN), else None."""
+    try:
+        key = json.dumps([cfg or {}, bool(smoke)], sort_keys=True)
+    except (TypeError, ValueError):
+        return None
+    return key if json.loads(key) == [cfg or {}, bool(smoke)] else None
+
+
+@functools.lru_cache(maxsize=32)
+def _filled_once(key: str) -> dict[str, Any]:
+    # a rig run fills the same configuration in for every point of a case: validate it once per process
+    cfg, smoke = json.loads(key)
+    return _filled(cfg, smoke)
+
+
+def _filled(cfg: dict | None, smoke: bool) -> dict[str, Any]:
     out = copy.deepcopy(dict(cfg or {}))
     if "walls" in out:  # a wall given is laid over the paper's materials: one e can change alone
         out["walls"] = merge(_validator().schema["properties"]["walls"]["default"], out["walls"])
