@@ -379,9 +379,14 @@ def _poly4(pp, p1, p2):
     pp[3] = 0.0
 
 
-@njit(cache=True)
-def encode_contact(mode, side, sigma):
+def contact_code(mode, side, sigma):
+    """One integer for a contact state (mode, side, sigma): what a run starts from and ends in."""
     return mode + 10 * (side + 1) + 100 * (sigma + 1)
+
+
+# the kernels' copy; Python calls contact_code, so importing a module that only names a state loads no
+# compiled code (a cached load costs about 0.1 s, and plots and the workflow's start-up need none)
+encode_contact = njit(cache=True)(contact_code)
 
 
 # ----------------------------------------------------------------------------

@@ -25,7 +25,7 @@ from .params import Protocol, System, a_max
 from .simulate import simulate
 
 ROOTS = ("upper", "lower")
-JUST_AFTER_RIGHT_IMPACT = K.encode_contact(K.MODE_FREE, 1, 0)
+JUST_AFTER_RIGHT_IMPACT = K.contact_code(K.MODE_FREE, 1, 0)
 LANDING_TOLERANCE = 1e-3
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
 

@@ -16,6 +16,8 @@ from __future__ import annotations
 import math
 from dataclasses import KW_ONLY, asdict, dataclass, field
 
+import numpy as np
+
 DAMPER_KINDS = ("cid", "pid")
 STARTS = ("centre", "left", "right")
 G_GRAV = 9.80665  # m/s^2, standard gravity; only friction needs a physical scale
@@ -47,6 +49,12 @@ def check_fields(obj, **allowed: str) -> None:
     for name, interval in allowed.items():
         lo, hi = (float(bound) for bound in interval[1:-1].split(","))
         _check(name, getattr(obj, name), lo, hi, lo_open=interval[0] == "(", hi_open=interval[-1] == ")")
+
+
+def frequency_grid(r_min: float, r_max: float, r_step: float) -> np.ndarray:
+    """Inclusive grid r_min, r_min + step, ..., r_max, free of accumulated round-off."""
+    n = int(math.floor((r_max - r_min) / r_step + 1e-9)) + 1
+    return np.round(r_min + r_step * np.arange(n), 12)
 
 
 def a_max(beta: float, force_ratio: float) -> float:

@@ -22,7 +22,6 @@ from importlib import resources
 from pathlib import Path
 
 import numpy as np
-from scipy import signal
 
 from .params import ParameterError, _check, check_choice
 
@@ -179,6 +178,8 @@ def kanai_tajimi(seed: int, duration_s: float, dt: float = 0.01, *, soil: str = 
     _check("duration_s", duration_s, 0.0, 1e5, lo_open=True)
     _check("dt", dt, 0.0, 1.0, lo_open=True)
     _check("s0", s0, 0.0, 1e6, lo_open=True)
+    from scipy import signal  # here: scipy.signal takes about 0.6 s to import, and most users read records
+
     wg, zg = SOILS[soil]
     n = int(round(duration_s / dt)) + 1
     rng = np.random.default_rng(seed)

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from . import _kernels as K
-from .params import IPC_CLASSES, Protocol, System, ipc_class, read_diagnostics
+from .params import IPC_CLASSES, Protocol, System, frequency_grid, ipc_class, read_diagnostics  # noqa: F401 (frequency_grid: re-exported)
 
 #: relative velocity below which a rebound is treated as sticking, in units of
 #: F0/K * omega (the velocity scale of the forcing); far below any resolved rebound
@@ -27,7 +27,7 @@ STICK_VELOCITY = 1e-8
 
 
 _WARM: set = set()
-FREE_FLIGHT = K.encode_contact(K.MODE_FREE, 0, 0)
+FREE_FLIGHT = K.contact_code(K.MODE_FREE, 0, 0)
 
 
 def _cache_dir() -> Path:
@@ -95,9 +95,9 @@ def initial_state(system: System, start: str):
     """
     half = 0.5 * system.gap
     if start == "centre" or system.gap == 0.0:
-        return np.zeros(4), K.encode_contact(K.MODE_FREE, 0, 0)
+        return np.zeros(4), K.contact_code(K.MODE_FREE, 0, 0)
     side = 1 if start == "right" else -1
-    return np.array([0.0, 0.0, side * half, 0.0]), K.encode_contact(K.MODE_STUCK, side, 0)
+    return np.array([0.0, 0.0, side * half, 0.0]), K.contact_code(K.MODE_STUCK, side, 0)
 
 
 def _check_resonance(system: System, r: float):
@@ -207,12 +207,6 @@ def _result(system, r, protocol, diag, z_out, final, rec) -> RunResult:
         final_contact=int(final),
         records=records,
     )
-
-
-def frequency_grid(r_min: float, r_max: float, r_step: float) -> np.ndarray:
-    """Inclusive grid r_min, r_min + step, ..., r_max, free of accumulated round-off."""
-    n = int(math.floor((r_max - r_min) / r_step + 1e-9)) + 1
-    return np.round(r_min + r_step * np.arange(n), 12)
 
 
 @dataclass

@@ -12,9 +12,7 @@ import math
 
 import numpy as np
 
-from .params import ParameterError, Protocol, System
-from .readings import add_readings
-from .simulate import frequency_grid, sweep
+from .params import ParameterError, Protocol, System, frequency_grid
 
 
 def _fmt(x: float) -> str:
@@ -107,7 +105,11 @@ def curve_starts(cfg: dict, spec: dict) -> list:
 
 def run_curve(cfg: dict, spec: dict, gap_ratios=None, mode: str = "from_rest"):
     """All sweeps of one curve (one sweep mode), as a self-describing dataset."""
+    # imported here: the figures and tables import this module for its grids and names, and should not
+    # pay for the kernels, scipy and xarray (about 0.7 s of every such job's start)
     from .dataset import curve_dataset
+    from .readings import add_readings
+    from .simulate import sweep
 
     gaps = gap_grid(cfg) if gap_ratios is None else np.asarray(gap_ratios, dtype=float)
     r = freq_grid(cfg)

@@ -195,7 +195,7 @@ def _run_model(cfg: dict, case: Case, r: float, ts_s: np.ndarray, *, forced: boo
         p[K.P_F] = 0.0
         p[K.P_VSTICK] = STICK_VELOCITY * max(abs(x0_mm), 1e-6)
         z0 = np.array([x0_mm, 0.0, x0_mm, 0.0])
-        code = K.encode_contact(K.MODE_FREE, 0, 0)
+        code = K.contact_code(K.MODE_FREE, 0, 0)
     tm = np.ascontiguousarray(ts_s * omega)
     xs = np.empty(tm.size)
     ss = np.empty(tm.size)
