@@ -147,3 +147,20 @@ def test_config_is_checked_and_the_shipped_yaml_matches_the_defaults():
         pytest.skip("config/validation.yaml not present")
     cfg = G.validation_config(yaml.safe_load(path.read_text()))
     assert cfg["grid"] and len(G.all_cases(cfg)) == 108
+
+
+def test_a_filled_configuration_is_a_fresh_copy_every_call():
+    """validation_config fills a configuration once per process; what it hands out must not be shared."""
+    given = {"excitation": {"force_ratio_mm": 1e-4}}
+    first = G.validation_config(given)
+    first["excitation"]["force_ratio_mm"] = 7.0
+    first["grid"].clear()
+    second = G.validation_config(given)
+    assert second["excitation"]["force_ratio_mm"] == 1e-4 and second["grid"]
+    assert given == {"excitation": {"force_ratio_mm": 1e-4}}  # the input is not filled in place
+    # a value JSON cannot carry unchanged (a tuple) is validated as given, not as its JSON list
+    with pytest.raises(ValueError, match="grid"):
+        G.validation_config({"grid": {"walls": ("glass",)}})
+    for _ in range(2):  # a bad configuration is refused every time, not only the first
+        with pytest.raises(ValueError, match="unknown key"):
+            G.validation_config({"protocl": {}})
