@@ -179,13 +179,40 @@ def test_one_figure_dry_run_lists_only_its_jobs(smoke):
     # the target goes first: --configfile takes every word after it
     out = _snakemake(smoke, "results/figures/fig09.png", "-n", "--forceall",
                      "--configfile", "config/smoke.yaml").stdout
-    start = out.rindex("Job stats:")
-    table = out[start:out.index("Reasons:", start)]
-    jobs = {line.split()[0]: int(line.split()[1]) for line in table.splitlines()
-            if len(line.split()) == 2 and line.split()[1].isdigit()}
+    jobs = _job_stats(out)
     # Fig. 9 of the smoke study: two CID curves, no TMD, no table
     assert jobs == {"sweep_curve": 2, "figure": 1, "total": 3}, out[-2000:]
     assert "pid_" not in out and "tmd_optimum" not in out
+
+
+def _job_stats(out: str) -> dict[str, int]:
+    start = out.rindex("Job stats:")
+    table = out[start:out.index("Reasons:", start)]
+    return {line.split()[0]: int(line.split()[1]) for line in table.splitlines()
+            if len(line.split()) == 2 and line.split()[1].isdigit()}
+
+
+def test_the_papers_scope_skips_exactly_the_stages_beyond_it():
+    """config/paper.yaml over the full configuration (make paper): every job of the paper's stages, none
+    of Table 1 in numbers, the design charts or the loads."""
+    beyond = {"robustness", "design", "loads"}
+    full = _job_stats(_snakemake(ROOT, "-n", "--forceall").stdout)
+    paper = _job_stats(_snakemake(ROOT, "-n", "--forceall", "--configfile", "config/config.yaml",
+                                  "config/paper.yaml").stdout)
+    stage_of = {}
+    for smk in (ROOT / "workflow" / "rules").glob("*.smk"):
+        for line in smk.read_text().splitlines():
+            if line.startswith("rule "):
+                stage_of[line.split()[1].rstrip(":")] = smk.stem
+    assert {stage_of[r] for r in full if r in stage_of} >= beyond  # the full study has them
+    assert not {stage_of[r] for r in paper if r in stage_of} & beyond
+    kept = {r: n for r, n in full.items() if stage_of.get(r) not in beyond and r not in ("total", "report", "study",
+                                                                                           "all", "archive")}
+    assert {r: paper.get(r) for r in kept} == kept  # the paper's own jobs, all of them
+    # a stage that cannot be skipped is refused by name
+    proc = _snakemake(ROOT, "-n", "--configfile", "config/config.yaml", str(ROOT / "tests" / "data" / "skip_numerics.yaml"),
+                      check=False)
+    assert proc.returncode != 0 and "skip_stages" in proc.stdout + proc.stderr
 
 
 def test_up_to_date_study_reruns_nothing(smoke):

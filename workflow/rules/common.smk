@@ -105,7 +105,15 @@ LIB_ARCHIVE = library("archive.py", "report.py", "provenance.py", "pipeline.py",
 ARCHIVE = f"results/archive/{archive_name(git_state()['git_commit'], git_state()['git_dirty'])}"
 
 
-# stages that run only when configured
+# stages that run only when configured (and, for those beyond the paper, not skipped: config/paper.yaml)
+SKIPPED_STAGES = set(config.get("skip_stages", []))
+
+
+def stage_config(name):
+    """A configured stage's section, or None when it is not configured or skip_stages names it."""
+    return None if name in SKIPPED_STAGES else config.get(name)
+
+
 MASRI = "masri" in config
 NUMERICS = "numerics" in config
 VALIDATION = config.get("validation", {})
@@ -124,14 +132,14 @@ if VALIDATION:
     RIG = validation_config(RIG, smoke=VALIDATION.get("smoke", False))
     RIG_CASES = {c.id: dataclasses.asdict(c) for c in study_cases(RIG, VALIDATION.get("smoke", False))}
 # Table 1 in numbers: its designs, and the sweeps their optimum gaps come from
-ROBUSTNESS = "robustness" in config
+ROBUSTNESS = stage_config("robustness") is not None
 ROBUSTNESS_DESIGNS = design_names(config) if ROBUSTNESS else []
 # design charts: the sweeps they read, per damper
-DESIGN = config.get("design")
+DESIGN = stage_config("design")
 DESIGN_KINDS = list(DAMPER_KINDS) if DESIGN else []
 DESIGN_CURVES = {kind: {curve_id(s): s for s in chart_specs(DESIGN, kind)} for kind in IMPACT_KINDS} if DESIGN else {}
 # the earthquake and wind study: its buildings, dampers and load families
-LOADS = config.get("loads")
+LOADS = stage_config("loads")
 if LOADS:
     loads.check_config(LOADS)
 LOADS_BUILDINGS = list(loads.buildings(LOADS)) if LOADS else []
