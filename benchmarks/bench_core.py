@@ -25,9 +25,9 @@ from pathlib import Path
 import numpy as np
 
 from impact.baselines.ivp import simulate_ivp
-from impact.params import Protocol, System
-from impact.provenance import package_versions
-from impact.simulate import frequency_grid, simulate, sweep
+from impact.engine.paper import simulate, sweep
+from impact.model.params import Protocol, System, frequency_grid
+from impact.outputs.provenance import package_versions
 
 PROTOCOL = Protocol()
 K_IMPACTS = 50

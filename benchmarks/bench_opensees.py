@@ -30,9 +30,10 @@ from pathlib import Path
 
 import numpy as np
 
-from impact.building import Building
-from impact.records import load_record
-from impact.scene import Damper, GroundMotion, Scene, simulate_scene
+from impact.engine.scenes import simulate_scene
+from impact.model.building import Building
+from impact.model.records import load_record
+from impact.model.scene import Damper, GroundMotion, Scene
 
 MASS_RATIO, GAP_M, RESTITUTION, PGA_G = 0.02, 0.05, 0.5, 0.35
 HERTZ_K = 1.0e10       # N/m^1.5; 1e12 keeps the contact stiffer, but Newton then fails at most steps

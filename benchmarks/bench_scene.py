@@ -23,12 +23,13 @@ import platform
 import time
 from pathlib import Path
 
-from impact.building import Building
-from impact.params import Protocol, System
-from impact.provenance import package_versions
-from impact.records import load_record
-from impact.scene import Damper, GroundMotion, Scene, paper_scene, simulate_scene
-from impact.simulate import simulate
+from impact.engine.paper import simulate
+from impact.engine.scenes import simulate_scene
+from impact.model.building import Building
+from impact.model.params import Protocol, System
+from impact.model.records import load_record
+from impact.model.scene import Damper, GroundMotion, Scene, paper_scene
+from impact.outputs.provenance import package_versions
 
 
 def best_time(fun, repeats: int):

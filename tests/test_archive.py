@@ -15,8 +15,8 @@ import xarray as xr
 import yaml
 
 import impact
-from impact import archive
-from impact.io import write_dataset
+from impact.outputs import archive
+from impact.outputs.files import write_dataset
 
 MARKER = 1234.5678901234  # a value that occurs once in the uncompressed dataset's bytes
 CONFIG = {"structure": {"beta": 0.0048}, "protocol": {"periods": 40}, "figures": {"fig08": {}}}
@@ -271,7 +271,7 @@ def test_snakemake_script_entry_archives_every_named_input_but_the_library(tree,
     out = tree / "results" / "archive" / "x.tar.gz"
     smk = SimpleNamespace(
         input=Named(sweeps=["results/sweeps/cid_a.nc"], report="results/report/index.html",
-                    config=["config/smoke.yaml"], library=["src/impact/archive.py"]),
+                    config=["config/smoke.yaml"], library=["src/impact/outputs/archive.py"]),
         output=[str(out)], params=Named(), config=CONFIG)
     assert archive.snakemake_main(smk) == out
     manifest = json.loads(_member(out, "MANIFEST.json"))

@@ -20,7 +20,7 @@ from impact.baselines import (
     simulate_rk4,
 )
 from impact.baselines.penalty import dashpot
-from impact.params import System
+from impact.model.params import System
 
 TWO_PI = 2.0 * math.pi
 
@@ -363,7 +363,7 @@ def test_unresolved_accumulation_fails_fast():
 def test_stability_ok_means_finished_and_within_tolerance():
     import pandas as pd
 
-    from impact.numerics import judge_stability
+    from impact.stages.numerics import judge_stability
 
     rows = [  # case a: the core and three baselines; case b: the core failed, nothing to compare with
         {"case": "a", "method": "core", "status": "ok", "finite": True, "max_penetration": 0.0, "amplitude": 2.0},
@@ -386,7 +386,7 @@ TINY_STUDY = {"periods": 3, "repeats": 2, "ivp_methods": ["RK45"], "rtol": [1e-6
 
 
 def test_a_baseline_over_budget_is_recorded_as_failed_too_slow():
-    from impact import numerics as N
+    from impact.stages import numerics as N
 
     tight = {**TINY_STUDY, "budget": 1e-4}  # no solve_ivp run of 2 periods finishes in 0.1 ms
     runs = N.stability_runs(tight, families=["ivp"])
@@ -405,7 +405,7 @@ def test_a_baseline_over_budget_is_recorded_as_failed_too_slow():
 def test_a_run_over_a_second_is_timed_once_and_shorter_runs_keep_the_minimum(monkeypatch):
     import time
 
-    from impact import numerics as N
+    from impact.stages import numerics as N
 
     calls = []
 
@@ -424,7 +424,7 @@ def test_a_run_over_a_second_is_timed_once_and_shorter_runs_keep_the_minimum(mon
 
 def test_the_numerics_pieces_join_into_the_whole_study():
     """Run as one piece per (case, family) or all at once, every number but the run times is the same."""
-    from impact import numerics as N
+    from impact.stages import numerics as N
 
     cases = ["cid_2eipc", "pid_tuned"]
     whole = N.work_precision(TINY_STUDY, cases=cases)

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from impact.coexistence import count_attractors, ensemble_members, member_state, run_ensemble
-from impact.params import Protocol, System
-from impact.simulate import simulate, sweep
+from impact.engine.paper import simulate, sweep
+from impact.model.params import Protocol, System
+from impact.stages.coexistence import count_attractors, ensemble_members, member_state, run_ensemble
 
 PAPER = dict(mu=0.01, beta=0.0048, e=0.25)
 SHORT = Protocol(periods=60, average_from=30)

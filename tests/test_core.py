@@ -9,8 +9,8 @@ import pytest
 from reference import one_body_amplitude, oscillator, rms_amplitude
 from scipy.optimize import brentq
 
-from impact.params import ParameterError, Protocol, System
-from impact.simulate import frequency_grid, simulate, sweep
+from impact.engine.paper import simulate, sweep
+from impact.model.params import ParameterError, Protocol, System, frequency_grid
 
 PAPER = dict(mu=0.01, beta=0.0048, e=0.25)
 

@@ -1,4 +1,4 @@
-"""Design charts and `impact design` (impact.design): the chart is the study's runs, and its answers hold."""
+"""Design charts and `impact design` (impact.stages.design): the chart is the study's runs, and its answers hold."""
 
 from __future__ import annotations
 
@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from impact.cli import main
-from impact.design import chart_config, chart_specs, impact_chart, tmd_chart, tmd_mu_grid
-from impact.io import write_dataset
-from impact.params import Protocol, System
-from impact.simulate import sweep
-from impact.study import freq_grid, run_curve
+from impact.engine.paper import sweep
+from impact.model.params import Protocol, System
+from impact.outputs.files import write_dataset
+from impact.stages.design import chart_config, chart_specs, impact_chart, tmd_chart, tmd_mu_grid
+from impact.stages.sweeps import freq_grid, run_curve
 
 CFG = {
     "structure": {"beta": 0.0048, "force_ratio": 0.096},

@@ -1,4 +1,4 @@
-"""Experiment records and the analysis chain (impact.experiment).
+"""Experiment records and the analysis chain (impact.stages.validation).
 
 Every test compares against an independent closed form (SDOF frequency
 response, exact free decay, the impact law of model.md) or a deliberately
@@ -13,9 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from impact.experiment import (
+from impact.stages.validation.analysis import (
     ASSUMED_SENSOR_NOISE_MM,
-    RecordError,
     UnresolvedPeakError,
     beta_to_delta,
     count_impacts,
@@ -25,15 +24,18 @@ from impact.experiment import (
     half_power,
     half_power_damping,
     impacts_per_cycle,
-    load_record,
-    load_records,
     log_decrement,
-    make_record,
     rebound_height,
     restitution_from_drop,
     steady_amplitude,
     sweep_curve,
-    write_record,
+)
+from impact.stages.validation.measurements import (
+    MeasurementError,
+    load_measurement,
+    load_measurements,
+    make_measurement,
+    write_measurement,
 )
 
 F_STRUCT = 1.5  # Hz, the paper's rig
@@ -350,23 +352,23 @@ GOOD_ROWS = [f"{0.01 * i:.2f},{20 * math.cos(2 * math.pi * 1.5 * 0.01 * i):.4f}"
 def test_record_roundtrip_csv_and_netcdf(tmp_path):
     t = np.arange(0.0, 10.0, 0.01)
     x = free_decay(t, 20.0, 0.00048)
-    rec = make_record(_free_decay_header(), {"t_s": t, "x": x})
+    rec = make_measurement(_free_decay_header(), {"t_s": t, "x": x})
     for name in ("a.csv", "a.nc"):
-        path = write_record(tmp_path / name, rec)
-        back = load_record(path)
+        path = write_measurement(tmp_path / name, rec)
+        back = load_measurement(path)
         assert back.header == rec.header
         np.testing.assert_array_equal(back.t, t)
         np.testing.assert_array_equal(back.x, x)
         np.testing.assert_allclose(back.x_in("m"), x / 1000)
     assert not [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]
-    recs = load_records(tmp_path, kind="free_decay")
+    recs = load_measurements(tmp_path, kind="free_decay")
     assert len(recs) == 2
     res = free_decay_delta(recs[0])
     assert res.mean == pytest.approx(beta_to_delta(0.00048), rel=1e-6)
 
 
 def test_loader_accepts_hand_written_file(tmp_path):
-    rec = load_record(_csv(tmp_path / "ok.csv", GOOD_HEADER, "t_s,x", GOOD_ROWS))
+    rec = load_measurement(_csv(tmp_path / "ok.csv", GOOD_HEADER, "t_s,x", GOOD_ROWS))
     assert rec.kind == "free_decay" and rec.synthetic is False and rec.header["sample_rate_hz"] == 100.0
     assert rec.t.size == 30 and not rec.x.flags.writeable
 
@@ -379,22 +381,22 @@ def test_loader_accepts_hand_written_file(tmp_path):
 ])
 def test_loader_missing_header_field(tmp_path, drop, match):
     header = [h for h in GOOD_HEADER if h != drop]
-    with pytest.raises(RecordError, match=match):
-        load_record(_csv(tmp_path / "bad.csv", header, "t_s,x", GOOD_ROWS))
+    with pytest.raises(MeasurementError, match=match):
+        load_measurement(_csv(tmp_path / "bad.csv", header, "t_s,x", GOOD_ROWS))
 
 
 def test_loader_non_increasing_time(tmp_path):
     rows = list(GOOD_ROWS)
     rows[16] = rows[15]  # data row 17 repeats the time of row 16
-    with pytest.raises(RecordError, match=r"row 17 \(line 24\): t_s is not increasing"):
-        load_record(_csv(tmp_path / "bad.csv", GOOD_HEADER, "t_s,x", rows))
+    with pytest.raises(MeasurementError, match=r"row 17 \(line 24\): t_s is not increasing"):
+        load_measurement(_csv(tmp_path / "bad.csv", GOOD_HEADER, "t_s,x", rows))
 
 
 def test_loader_nan(tmp_path):
     rows = list(GOOD_ROWS)
     rows[4] = "0.04,nan"
-    with pytest.raises(RecordError, match=r"row 5 .*x is NaN"):
-        load_record(_csv(tmp_path / "bad.csv", GOOD_HEADER, "t_s,x", rows))
+    with pytest.raises(MeasurementError, match=r"row 5 .*x is NaN"):
+        load_measurement(_csv(tmp_path / "bad.csv", GOOD_HEADER, "t_s,x", rows))
 
 
 @pytest.mark.parametrize("columns, match", [
@@ -405,8 +407,8 @@ def test_loader_nan(tmp_path):
 ])
 def test_loader_wrong_column(tmp_path, columns, match):
     rows = GOOD_ROWS if "," in columns else [r.split(",")[0] for r in GOOD_ROWS]
-    with pytest.raises(RecordError, match=match):
-        load_record(_csv(tmp_path / "bad.csv", GOOD_HEADER, columns, rows))
+    with pytest.raises(MeasurementError, match=match):
+        load_measurement(_csv(tmp_path / "bad.csv", GOOD_HEADER, columns, rows))
 
 
 @pytest.mark.parametrize("edit, match", [
@@ -422,42 +424,42 @@ def test_loader_wrong_column(tmp_path, columns, match):
 ])
 def test_loader_other_malformations(tmp_path, edit, match):
     header, rows = edit(list(GOOD_HEADER), list(GOOD_ROWS))
-    with pytest.raises(RecordError, match=match):
-        load_record(_csv(tmp_path / "bad.csv", header, "t_s,x", rows))
+    with pytest.raises(MeasurementError, match=match):
+        load_measurement(_csv(tmp_path / "bad.csv", header, "t_s,x", rows))
 
 
 def test_loader_error_names_the_file(tmp_path):
     path = _csv(tmp_path / "named.csv", GOOD_HEADER[1:], "t_s,x", GOOD_ROWS)
-    with pytest.raises(RecordError, match="named.csv: header field kind missing"):
-        load_record(path)
+    with pytest.raises(MeasurementError, match="named.csv: header field kind missing"):
+        load_measurement(path)
 
 
 def test_drop_test_record(tmp_path):
     e, mu = 0.46, 0.0129
     hd = np.array(HEIGHTS * 2)
-    rec = make_record({"kind": "drop_test", "synthetic": True, "mu": mu, "wall": "rubber_1.0mm", "e": e,
+    rec = make_measurement({"kind": "drop_test", "synthetic": True, "mu": mu, "wall": "rubber_1.0mm", "e": e,
                        "ball_diameter_mm": 40.0}, {"drop_height_cm": hd, "rebound_height_cm": rebound_height(hd, e, mu)})
-    back = load_record(write_record(tmp_path / "drop.csv", rec))
+    back = load_measurement(write_measurement(tmp_path / "drop.csv", rec))
     np.testing.assert_allclose(drop_test_restitution(back), e, rtol=1e-12)
     lines = (tmp_path / "drop.csv").read_text().splitlines()
     lines[-1] = "50.0,60.0"
     (tmp_path / "bad.csv").write_text("\n".join(lines) + "\n")
-    with pytest.raises(RecordError, match=r"row 6 .*rebound_height_cm \(60.0\) exceeds drop_height_cm"):
-        load_record(tmp_path / "bad.csv")
-    with pytest.raises(RecordError, match="give e only for a synthetic drop test"):
-        make_record({"kind": "drop_test", "synthetic": False, "mu": mu, "wall": "steel", "e": 0.4},
+    with pytest.raises(MeasurementError, match=r"row 6 .*rebound_height_cm \(60.0\) exceeds drop_height_cm"):
+        load_measurement(tmp_path / "bad.csv")
+    with pytest.raises(MeasurementError, match="give e only for a synthetic drop test"):
+        make_measurement({"kind": "drop_test", "synthetic": False, "mu": mu, "wall": "steel", "e": 0.4},
                     {"drop_height_cm": [25.0], "rebound_height_cm": [3.0]})
 
 
 def test_write_refuses_invalid_and_keeps_old_file(tmp_path):
     t = np.arange(0.0, 1.0, 0.01)
-    good = make_record(_free_decay_header(), {"t_s": t, "x": np.sin(t)})
-    path = write_record(tmp_path / "r.csv", good)
+    good = make_measurement(_free_decay_header(), {"t_s": t, "x": np.sin(t)})
+    path = write_measurement(tmp_path / "r.csv", good)
     before = path.read_text()
     x = np.sin(t)
     x[3] = np.nan
-    with pytest.raises(RecordError, match="row 4: x is NaN"):
-        write_record(path, (_free_decay_header(), {"t_s": t, "x": x}))
+    with pytest.raises(MeasurementError, match="row 4: x is NaN"):
+        write_measurement(path, (_free_decay_header(), {"t_s": t, "x": x}))
     assert path.read_text() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.csv"]
 
@@ -473,7 +475,7 @@ def test_sweep_records_to_half_power(tmp_path):
         amp = a_static * sdof_amplitude(r, beta)
         header = {"kind": "forced_sweep_point", "synthetic": True, "sample_rate_hz": fs, "units": "mm",
                   "damper": "none", "r": float(r), "structure_hz": F_STRUCT}
-        write_record(tmp_path / f"p{i:03d}.csv", (header, {"t_s": t, "x": amp * np.sin(2 * math.pi * fhz * t + 0.3)}))
-    curve = sweep_curve(load_records(tmp_path, kind="forced_sweep_point"))
+        write_measurement(tmp_path / f"p{i:03d}.csv", (header, {"t_s": t, "x": amp * np.sin(2 * math.pi * fhz * t + 0.3)}))
+    curve = sweep_curve(load_measurements(tmp_path, kind="forced_sweep_point"))
     np.testing.assert_allclose(curve.amplitude, a_static * sdof_amplitude(curve.r, beta), rtol=2e-3)
     assert half_power_damping(curve.r, curve.amplitude) == pytest.approx(beta, rel=0.02)

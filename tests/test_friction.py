@@ -7,8 +7,8 @@ import pytest
 from reference import one_body_amplitude, oscillator_derivatives
 from scipy.optimize import brentq
 
-from impact.params import Protocol, System
-from impact.simulate import friction_data, simulate
+from impact.engine.paper import friction_data, simulate
+from impact.model.params import Protocol, System
 
 PAPER = dict(mu=0.01, beta=0.0048, e=0.25)
 

@@ -1,5 +1,5 @@
 """The paper kernel's results do not move: 20 runs frozen before the kernel shared its contact search with
-impact.core (tests/data/frozen_runs.json) are reproduced to 1e-12, as far as the runs themselves allow.
+impact.engine (tests/data/frozen_runs.json) are reproduced to 1e-12, as far as the runs themselves allow.
 
 Some of the frozen runs are sensitive: a change of 1e-15 in the forcing phase (one rounding of the kernel's
 arithmetic) moves their impact count and amplitude by per cent over 500 periods (long transients of a
@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from impact.params import Protocol, System
-from impact.simulate import simulate
+from impact.engine.paper import simulate
+from impact.model.params import Protocol, System
 
 FROZEN = json.loads((Path(__file__).parent / "data" / "frozen_runs.json").read_text())["cases"]
 # phase shifts of a few units of round-off: the ensemble a run's own rounding could have produced

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from impact.io import atomic_path, undescribed_variables, write_dataset
+from impact.outputs.files import atomic_path, undescribed_variables, write_dataset
 
 
 def _dataset():

@@ -1,4 +1,4 @@
-"""The earthquake and wind study (impact.loads): exact limits, linearity, seeds and the tables' logic."""
+"""The earthquake and wind study (impact.stages.loads): exact limits, linearity, seeds and the tables' logic."""
 
 from __future__ import annotations
 
@@ -8,10 +8,11 @@ import numpy as np
 import pytest
 from test_scene import _linear_roof
 
-from impact import loads as LD
-from impact.params import ParameterError
-from impact.records import load_record
-from impact.scene import GroundMotion, Scene, simulate_scene
+from impact.engine.scenes import simulate_scene
+from impact.model.params import ParameterError
+from impact.model.records import load_record
+from impact.model.scene import DAMPER_KINDS, GroundMotion, Scene
+from impact.stages import loads as LD
 
 CFG = {
     "storeys": [1, 3], "periods_s": [0.5], "zeta": 0.02, "mass_ratios": [0.02], "e": 0.25, "gap_ratios": [0.5, 1.0],
@@ -27,7 +28,7 @@ CFG = {
 @pytest.fixture(scope="module")
 def study():
     bare = {b: LD.bare_runs(CFG, b) for b in LD.buildings(CFG)}
-    dampers = {(b, k): LD.damper_runs(CFG, b, k, bare[b]) for b in bare for k in LD.KINDS}
+    dampers = {(b, k): LD.damper_runs(CFG, b, k, bare[b]) for b in bare for k in DAMPER_KINDS}
     return bare, dampers, LD.collect(bare, dampers)
 
 
@@ -87,8 +88,8 @@ def test_impact_dampers_stay_within_their_gap_and_the_gap_is_sized_at_the_design
 def test_the_best_damper_is_the_lowest_ratio_and_verdicts_count_every_run(study):
     _, _, out = study
     best = LD.best_damper_table(out)
-    ratios = best[[f"{k}_peak_roof_ratio" for k in LD.KINDS]].to_numpy()
-    chosen = best["best"].map(lambda k: LD.KINDS.index(k)).to_numpy()
+    ratios = best[[f"{k}_peak_roof_ratio" for k in DAMPER_KINDS]].to_numpy()
+    chosen = best["best"].map(lambda k: DAMPER_KINDS.index(k)).to_numpy()
     np.testing.assert_array_equal(chosen, np.nanargmin(ratios, axis=1))
     verdicts = LD.verdict_table(out)
     assert (verdicts["helps"] + verdicts["does_nothing"] + verdicts["makes_worse"] == verdicts["cases"]).all()

@@ -1,4 +1,4 @@
-"""Physics checks of the 2-EIPC closed form (impact.masri) against masri.md.
+"""Physics checks of the 2-EIPC closed form (impact.closed_form.masri) against masri.md.
 
 Every check compares the closed form with something computed independently:
 the exact flow and impact map (periodicity, fixed point, finite-difference
@@ -11,8 +11,8 @@ import math
 import numpy as np
 import pytest
 
-from impact import masri
-from impact.masri import (
+from impact.closed_form import masri
+from impact.closed_form.masri import (
     BRANCHES,
     ImpactMapError,
     classify,
@@ -21,7 +21,7 @@ from impact.masri import (
     orbit_initial_state,
     periodicity_residual,
 )
-from impact.params import ParameterError
+from impact.model.params import ParameterError
 
 BETA = 0.0048
 XST = 0.096  # force_ratio = F0/K; gaps below are quoted as d/x_st like masri.md section 9

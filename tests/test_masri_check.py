@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from impact.masri import masri_2eipc
-from impact.masri_check import check_stable, check_unstable, orbit_rms_amplitude
+from impact.closed_form.masri import masri_2eipc, orbit_rms_amplitude
+from impact.stages.masri.check import check_stable, check_unstable
 
 BETA, XST = 0.0048, 0.096
 

@@ -75,7 +75,7 @@ def test_sweep_dataset_is_self_describing_and_round_trips(smoke, tmp_path):
     # the reductions are those of the per-frequency data
     np.testing.assert_array_equal(ds["x_max"].values, ds["amplitude"].max("freq_ratio").values)
     # round trip: write with the library's writer, read back, identical data and attributes
-    from impact.io import write_dataset
+    from impact.outputs.files import write_dataset
 
     again = tmp_path / "again.nc"
     write_dataset(ds, again)
@@ -101,7 +101,7 @@ def test_smoke_numbers_match_the_frozen_study(smoke):
 
 def test_every_dataset_of_the_study_is_self_describing(smoke):
     """Every .nc the smoke study writes carries CF conventions, its provenance and a described variable each."""
-    from impact.io import undescribed_variables
+    from impact.outputs.files import undescribed_variables
 
     paths = sorted((smoke / "results").rglob("*.nc"))
     assert len(paths) >= 10, paths  # sweeps, closed-form checks, coexistence, numerics
@@ -218,6 +218,32 @@ def test_the_papers_scope_skips_exactly_the_stages_beyond_it():
 def test_up_to_date_study_reruns_nothing(smoke):
     out = _snakemake(smoke, "-n", "--configfile", "config/smoke.yaml").stdout
     assert "Nothing to be done" in out or "nothing to be done" in out.lower()
+
+
+def test_an_engine_edit_reruns_every_job_that_simulates_and_no_other(smoke):
+    """A one-line content edit of the engine's contact module (the library a rule tracks is derived from its
+    script's imports): every job whose script reaches it is outdated, the figures and tables that only read
+    datasets are not (they rerun only downstream of new results).  Touching a file without changing it reruns
+    nothing."""
+    contact = smoke / "src" / "impact" / "engine" / "contact.py"
+    original = contact.read_text()
+    everything = _job_stats(_snakemake(smoke, "-n", "--forceall", "--configfile", "config/smoke.yaml").stdout)
+    try:
+        contact.touch()
+        assert "nothing to be done" in _snakemake(smoke, "-n", "--configfile", "config/smoke.yaml").stdout.lower()
+        contact.write_text(original + "\n# a one-line edit\n")
+        out = _snakemake(smoke, "-n", "--configfile", "config/smoke.yaml").stdout
+    finally:
+        contact.write_text(original)
+    outdated = _job_stats(out)
+    simulating = ("sweep_curve", "design_sweep", "continuation_curve", "ensemble_curve", "masri_check",
+                  "validation_case", "validation_contact_laws", "numerics_work_precision_piece", "loads_damper",
+                  "robustness_design")
+    for rule in simulating:
+        assert outdated.get(rule) == everything[rule], (rule, out[-3000:])
+    assert "tmd_optimum" not in outdated and "masri_chart" not in outdated
+    reasons = out[out.index("Reasons:"):]
+    assert "params" in reasons.lower()
 
 
 @pytest.mark.parametrize("patch,key", [

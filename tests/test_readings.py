@@ -1,4 +1,4 @@
-"""The closed-form and hybrid readings of X_m, and the refined resonance peak (impact.readings)."""
+"""The closed-form and hybrid readings of X_m, and the refined resonance peak (impact.stages.readings)."""
 
 from __future__ import annotations
 
@@ -12,12 +12,11 @@ import yaml
 from reference import oscillator, rms_amplitude
 from scipy.optimize import minimize_scalar
 
-from impact.masri import masri_2eipc
-from impact.masri_check import orbit_rms_amplitude
-from impact.params import Protocol, System
-from impact.readings import orbit_window_amplitude, refine_peak
-from impact.simulate import sweep
-from impact.study import run_curve
+from impact.closed_form.masri import masri_2eipc, orbit_rms_amplitude
+from impact.engine.paper import sweep
+from impact.model.params import Protocol, System
+from impact.stages.readings import orbit_window_amplitude, refine_peak
+from impact.stages.sweeps import run_curve
 
 CONFIG = yaml.safe_load((Path(__file__).parents[1] / "config" / "config.yaml").read_text())
 
@@ -114,7 +113,7 @@ def test_refined_peak_of_an_untouched_damper_is_the_analytic_resonance_peak():
 def test_closed_form_statement_judges_all_three_values(hybrid, explains):
     import pandas as pd
 
-    from impact.comparison import closed_form_statement
+    from impact.stages.tables import closed_form_statement
 
     curves = ["e25", "e45", "e65"]
     table = pd.DataFrame({"curve": curves, "paper_X_m": [0.32, 0.22, 0.40],

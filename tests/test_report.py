@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from impact import report
+from impact.outputs import report
 
 ROOT = Path(__file__).resolve().parents[1]
 CHROMIUM = shutil.which("chromium") or ("/usr/bin/chromium" if os.access("/usr/bin/chromium", os.X_OK) else None)
@@ -382,7 +382,7 @@ def test_snakemake_script_entry_shows_the_registry_sections(results):
     smk = SimpleNamespace(
         input=_Named(shown=[e["path"] for e in entries], overview=str(REPORT / "workflow.rst"), template=str(TEMPLATE),
                      benchmarks=[str(results / "benchmarks" / "figure" / "fig08.tsv")],
-                     library=["src/impact/report.py"]),
+                     library=["src/impact/outputs/report.py"]),
         output=[str(results / "report" / "index.html")],
         params=_Named(sections=entries), resources=_Named(executor="slurm"), config=CONFIG)
     page = report.snakemake_main(smk).read_text()

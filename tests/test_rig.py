@@ -1,4 +1,4 @@
-"""The virtual rig (impact.experiment.rig): each test compares with an independent reference."""
+"""The virtual rig (impact.stages.validation.rig): each test compares with an independent reference."""
 
 from __future__ import annotations
 
@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from impact.experiment import grid as G
-from impact.experiment import model as M
-from impact.experiment import rig as R
-from impact.experiment.analysis import drop_test_restitution, restitution_from_drop
-from impact.experiment.records import load_record, write_record
+from impact.stages.validation import grid as G
+from impact.stages.validation import paper_model as M
+from impact.stages.validation import rig as R
+from impact.stages.validation.analysis import drop_test_restitution, restitution_from_drop
+from impact.stages.validation.measurements import load_measurement, write_measurement
 
 WALLS = ["steel", "rubber_1.0mm", "rubber_0.5mm", "cork_3.0mm"]
 
@@ -152,7 +152,7 @@ def test_records_are_synthetic_valid_and_round_trip(tmp_path):
     assert h["kind"] == "forced_sweep_point" and h["r"] == 0.97 and h["e"] == 0.46
     assert h["forcing_hz"] == pytest.approx(0.97 * 1.5)
     assert rec.t.size == 20 * 100 / 1.5 // 1 + 1 or abs(rec.t.size - 20 * 100 / 1.5) <= 1
-    back = load_record(write_record(tmp_path / "p.csv", rec))
+    back = load_measurement(write_measurement(tmp_path / "p.csv", rec))
     np.testing.assert_array_equal(back.x, rec.x)
     assert back.header == rec.header
     fd = R.free_decay(spec, 25.0, duration_s=5.0, seed=1, wall_name="rubber_1.0mm")

@@ -1,4 +1,4 @@
-"""Table 1 in numbers (impact.robustness): the measures against exact similarities and linearity."""
+"""Table 1 in numbers (impact.stages.robustness): the measures against exact similarities and linearity."""
 
 from __future__ import annotations
 
@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from impact.params import Protocol, System
-from impact.robustness import (
+from impact.engine.paper import sweep
+from impact.model.params import Protocol, System
+from impact.stages.robustness import (
     Conditions,
     Design,
     design_dataset,
@@ -22,7 +23,6 @@ from impact.robustness import (
     table1_measured,
     within_band,
 )
-from impact.simulate import sweep
 
 BETA = 0.0048
 SHORT = Protocol(periods=120, average_from=60)
@@ -175,7 +175,7 @@ def test_a_defined_change_beyond_the_band_refutes_the_claim_despite_a_failed_run
                     coords={"units": [1, 2, 9]})
     change, holds = same_level(ds)
     assert change == pytest.approx(0.2) and holds is False
-    from impact.robustness import _multi_unit_row
+    from impact.stages.robustness import _multi_unit_row
 
     row = _multi_unit_row("cid_left", ds.assign_attrs(kind="cid"))
     assert row["supports"] == "no" and "n = 9" in row["note"] and "refutes" in row["note"]

@@ -15,20 +15,12 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from impact.building import Building
-from impact.params import ParameterError, Protocol, System
-from impact.records import REAL_RECORDS, RecordError, load_record, parse_at2, read_at2
-from impact.scene import (
-    Damper,
-    ForceRecord,
-    GroundMotion,
-    Harmonic,
-    Scene,
-    amplitude,
-    paper_scene_from_system,
-    simulate_scene,
-)
-from impact.simulate import simulate
+from impact.engine.paper import simulate
+from impact.engine.scenes import amplitude, simulate_scene
+from impact.model.building import Building
+from impact.model.params import ParameterError, Protocol, System
+from impact.model.records import REAL_RECORDS, RecordError, load_record, parse_at2, read_at2
+from impact.model.scene import Damper, ForceRecord, GroundMotion, Harmonic, Scene, paper_scene_from_system
 
 PAPER = dict(mu=0.01, beta=0.0048, e=0.25)
 
@@ -313,7 +305,7 @@ def test_a_tuned_mass_damper_lowers_the_resonant_response():
 
 def test_kanai_tajimi_reproduces_its_target_spectrum():
     """20 seeded realisations: the averaged periodogram follows the Kanai-Tajimi PSD within sampling error."""
-    from impact.records import SOILS, kanai_tajimi, kanai_tajimi_psd
+    from impact.model.records import SOILS, kanai_tajimi, kanai_tajimi_psd
 
     dt, duration, s0 = 0.01, 200.0, 0.05
     psd = []
@@ -338,7 +330,7 @@ def test_kanai_tajimi_reproduces_its_target_spectrum():
 
 
 def test_narrow_band_force_has_its_rms_and_centre():
-    from impact.records import narrow_band_force
+    from impact.model.records import narrow_band_force
 
     f = narrow_band_force(7, 2000.0, 0.02, centre_rad_s=6.0, bandwidth=0.05, rms=2.0)
     assert np.std(f) == pytest.approx(2.0, rel=0.1)
@@ -395,9 +387,10 @@ def test_a_scene_compiles_only_what_it_uses():
 
     probe = (
         "import numpy as np\n"
-        "from impact.building import Building\n"
-        "from impact.scene import Damper, GroundMotion, Scene, simulate_scene\n"
-        "from impact.core.run import run_scene\n"
+        "from impact.model.building import Building\n"
+        "from impact.model.scene import Damper, GroundMotion, Scene\n"
+        "from impact.engine.scenes import simulate_scene\n"
+        "from impact.engine.scene_loop import run_scene\n"
         "b = Building.uniform(2, 0.5, 0.02)\n"
         "simulate_scene(Scene(b, (Damper('cid', 1e3, gap=0.01, e=0.5),), GroundMotion(np.sin(np.arange(50)), 0.01)))\n"
         "sig = run_scene.signatures[0]\n"
@@ -454,7 +447,7 @@ def test_units_of_equal_mass_but_different_tuning_stay_distinct():
 
 def test_mode_weights_pair_conjugates_by_value_only():
     """Half rows sum one mode of each conjugate pair twice: pairs must be real pairs, found by value."""
-    from impact.core.modal import mode_weights
+    from impact.engine.modal import mode_weights
 
     def weights(kap):
         wt = np.zeros(len(kap))

@@ -338,7 +338,7 @@ def test_every_job_is_one_slurm_job_sized_by_its_rule(runs):
 @pytest.mark.slow
 def test_jobs_starting_together_share_the_numba_cache(runs):
     """Each sweep job compiles its kernel on first use into NUMBA_CACHE_DIR, under the lock of
-    impact.simulate.ensure_compiled: jobs starting together wait for each other, never write
+    impact.engine.paper.ensure_compiled: jobs starting together wait for each other, never write
     the cache at once, and load what the first one stored."""
     sweeps = [(dt.datetime.fromisoformat(info["StartTime"]), dt.datetime.fromisoformat(info["EndTime"]))
               for job, info in _slurm_records(runs).values() if job["rule"] == "sweep_curve"]

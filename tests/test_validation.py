@@ -1,4 +1,4 @@
-"""Cross-validation of Eq. (4) against the virtual rig (impact.experiment.validation)."""
+"""Cross-validation of Eq. (4) against the virtual rig (impact.stages.validation.steps)."""
 
 from __future__ import annotations
 
@@ -8,15 +8,15 @@ import math
 import numpy as np
 import pytest
 
-from impact.experiment import comparison as C
-from impact.experiment import grid as G
-from impact.experiment import model as M
-from impact.experiment import rig as R
-from impact.experiment import validation as V
-from impact.experiment.analysis import sweep_curve
-from impact.experiment.records import load_records
-from impact.params import Protocol
-from impact.simulate import simulate
+from impact.engine.paper import simulate
+from impact.model.params import Protocol
+from impact.stages.validation import comparison as C
+from impact.stages.validation import grid as G
+from impact.stages.validation import paper_model as M
+from impact.stages.validation import rig as R
+from impact.stages.validation import steps as V
+from impact.stages.validation.analysis import sweep_curve
+from impact.stages.validation.measurements import load_measurements
 
 # a short protocol: the tests check the machinery, not the paper's numbers
 SHORT = {
@@ -125,9 +125,9 @@ def test_run_validation_smoke_writes_everything(cfg, tmp_path):
     assert claims["drop_tests"]["max_abs_error_e"] < 0.01
     # the 0.01-type grid cannot resolve beta = 0.00048 (the analysis refuses it)
     assert claims["beta_half_power"]["half_power"]["paper_grid"]["rig"]["resolved"] is False
-    recs = load_records(tmp_path / "records")
+    recs = load_measurements(tmp_path / "records")
     assert recs and all(r.synthetic for r in recs)
-    assert {r.header["source"].split(":")[0] for r in recs} >= {"model", "virtual rig (impact.experiment.rig)"}
+    assert {r.header["source"].split(":")[0] for r in recs} >= {"model", "virtual rig (impact.stages.validation.rig)"}
     assert not list(tmp_path.rglob("*.tmp"))
 
 

@@ -1,8 +1,8 @@
 """Impact dampers for civil structures: an exact, reproducible study.
 
-The library behind the pipeline: models and parameters (:mod:`impact.params`),
-the exact event-driven simulator (:mod:`impact.simulate`), the TMD reference
-(:mod:`impact.tmd`) and Masri's closed form (:mod:`impact.masri`).
+The library behind the pipeline: models and parameters (:mod:`impact.model.params`),
+the exact event-driven simulator (:mod:`impact.engine.paper`), the TMD reference
+(:mod:`impact.closed_form.tmd`) and Masri's closed form (:mod:`impact.closed_form.masri`).
 """
 
 from importlib.metadata import PackageNotFoundError, version

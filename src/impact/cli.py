@@ -14,7 +14,7 @@ import math
 import os
 import sys
 
-from .params import STARTS, ParameterError, Protocol, System
+from impact.model.params import STARTS, ParameterError, Protocol, System
 
 DEFAULTS = dict(mu=0.01, beta=0.0048, e=0.25, gap_ratio=1.0, force_ratio=0.096)
 
@@ -95,7 +95,7 @@ def _finite(obj):
 
 
 def cmd_run(args) -> dict:
-    from .simulate import simulate
+    from impact.engine.paper import simulate
 
     system = _system(args)
     if args.units > 1:
@@ -108,7 +108,8 @@ def cmd_run(args) -> dict:
 
 def _run_units(system: System, args) -> dict:
     """A multi-unit damper (--units N > 1) on the scene core: N units of mass mu/N, gap d each."""
-    from .scene import amplitude, paper_scene_from_system, simulate_scene
+    from impact.engine.scenes import amplitude, simulate_scene
+    from impact.model.scene import paper_scene_from_system
 
     scene = paper_scene_from_system(system, args.r, _protocol(args), units=args.units)
     res = simulate_scene(scene)
@@ -123,7 +124,7 @@ def _run_units(system: System, args) -> dict:
 
 def _quake_record(args):
     """An .AT2 file, a real record's key, or kanai-tajimi:SOIL:SEED (a seeded synthetic record)."""
-    from .records import RecordError, kanai_tajimi, load_record
+    from impact.model.records import RecordError, kanai_tajimi, load_record
 
     if not args.record.startswith("kanai-tajimi:"):
         return load_record(args.record)
@@ -137,8 +138,9 @@ def _quake_record(args):
 
 def cmd_quake(args) -> dict:
     """A shear building under a ground-motion record, with or without a damper at one floor."""
-    from .building import Building
-    from .scene import Damper, GroundMotion, Scene, simulate_scene
+    from impact.engine.scenes import simulate_scene
+    from impact.model.building import Building
+    from impact.model.scene import Damper, GroundMotion, Scene
 
     record = _quake_record(args)
     building = Building.uniform(args.storeys, args.period_s, args.zeta, floor_mass=args.floor_mass_kg)
@@ -164,7 +166,8 @@ def cmd_quake(args) -> dict:
 
 
 def cmd_sweep(args) -> dict:
-    from .simulate import frequency_grid, sweep
+    from impact.engine.paper import sweep
+    from impact.model.params import frequency_grid
 
     if args.r_max < args.r_min:
         raise ParameterError(f"--r-max = {args.r_max} is below --r-min = {args.r_min}")
@@ -195,8 +198,8 @@ def cmd_sweep(args) -> dict:
         },
     }
     if args.out:
-        from .dataset import curve_dataset
-        from .io import write_dataset
+        from impact.outputs.datasets import curve_dataset
+        from impact.outputs.files import write_dataset
 
         ds = curve_dataset(system, [args.gap_ratio], [protocol.start], [[result]], protocol,
                            curve={"command": "impact " + " ".join(sys.argv[1:])})
@@ -207,9 +210,10 @@ def cmd_sweep(args) -> dict:
 
 def cmd_design(args) -> dict | str:
     """The smallest damper on the charts that meets --target-xm, checked by one direct simulation."""
-    from .design import KINDS, DesignError, design, load_charts
+    from impact.model.scene import DAMPER_KINDS
+    from impact.stages.design import DesignError, design, load_charts
 
-    charts = load_charts(args.charts, (args.damper,) if args.damper else KINDS)
+    charts = load_charts(args.charts, (args.damper,) if args.damper else DAMPER_KINDS)
     try:
         answer = design(charts, args.target_xm, amplitude_range=args.amplitude_range, refinement=args.refinement)
     except DesignError as exc:
@@ -244,8 +248,8 @@ def _design_text(a: dict) -> str:
 
 
 def cmd_masri(args) -> dict:
-    from .masri import masri_2eipc
-    from .params import a_max
+    from impact.closed_form.masri import masri_2eipc
+    from impact.model.params import a_max
 
     gap = args.gap_ratio * a_max(args.beta, args.force_ratio)
     sol = masri_2eipc(args.mu, args.e, args.beta, args.r, gap, force_ratio=args.force_ratio)
@@ -259,7 +263,7 @@ def cmd_masri(args) -> dict:
 
 def cmd_verify_archive(args) -> dict:
     """Re-check an archive against its manifest: exit 1 naming each differing entry on stderr."""
-    from .archive import archive_summary, check_archive
+    from impact.outputs.archive import archive_summary, check_archive
 
     problems = check_archive(args.file)
     for path, reason in problems:
@@ -367,7 +371,7 @@ def main(argv=None) -> int:
     except ParameterError as exc:
         ap.error(str(exc))
     except ValueError as exc:
-        from .records import RecordError
+        from impact.model.records import RecordError
 
         if not isinstance(exc, RecordError):
             raise

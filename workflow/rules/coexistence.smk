@@ -3,8 +3,6 @@
 
 
 rule continuation_curve:
-    input:
-        library=LIB_SWEEP,
     output:
         "results/coexistence/{curve}_{mode}.nc",
     log:
@@ -21,14 +19,13 @@ rule continuation_curve:
         runtime=30,
         mem_mb=1000,
     params:
+        library=library("continuation_curve"),
         study=curve_params,
     script:
         "../scripts/continuation_curve.py"
 
 
 rule ensemble_curve:
-    input:
-        library=LIB_SWEEP + library("coexistence.py"),
     output:
         "results/coexistence/{curve}_ensemble.nc",
     log:
@@ -44,6 +41,7 @@ rule ensemble_curve:
         runtime=60,
         mem_mb=1000,
     params:
+        library=library("ensemble_curve"),
         study=curve_params,
         ensemble=config.get("coexistence", {}).get("ensemble", {}),
     script:
@@ -55,7 +53,6 @@ rule coexistence_figure:
         from_rest=rules.sweep_curve.output[0],
         continuation=lambda wc: expand(rules.continuation_curve.output[0], curve=wc.curve, mode=COEXISTENCE_MODES),
         ensemble=rules.ensemble_curve.output[0],
-        library=LIB_PLOT,
     output:
         png=report(
             "results/figures/coexistence_{curve}.png",
@@ -77,16 +74,16 @@ rule coexistence_figure:
         runtime=5,
         mem_mb=1000,
     params:
+        library=library("coexistence_figure"),
         spec=lambda wc: CURVES[wc.curve],
     script:
-        "../scripts/plot_coexistence.py"
+        "../scripts/coexistence_figure.py"
 
 
 rule hysteresis_figure:
     input:
         from_rest=rules.sweep_curve.output[0],
         continuation=lambda wc: expand(rules.continuation_curve.output[0], curve=wc.curve, mode=COEXISTENCE_MODES),
-        library=LIB_PLOT + library("masri.py", "masri_check.py"),
     output:
         png=report(
             "results/figures/hysteresis_{curve}.png",
@@ -108,11 +105,12 @@ rule hysteresis_figure:
         runtime=5,
         mem_mb=1000,
     params:
+        library=library("hysteresis_figure"),
         spec=lambda wc: CURVES[wc.curve],
         gap_ratio=config.get("coexistence", {}).get("hysteresis", {}).get("gap_ratio", 1.6),
         structure=config["structure"],
     script:
-        "../scripts/plot_hysteresis.py"
+        "../scripts/hysteresis_figure.py"
 
 
 rule coexistence_table:
@@ -122,7 +120,6 @@ rule coexistence_table:
             rules.continuation_curve.output[0], curve=[curve_id(s) for s in COEXISTENCE_CURVES], mode=COEXISTENCE_MODES
         ),
         ensemble=expand(rules.ensemble_curve.output[0], curve=[curve_id(s) for s in COEXISTENCE_CURVES]),
-        library=library("comparison.py", "study.py", "pipeline.py", "io.py"),
     output:
         table=report(
             "results/tables/coexistence.csv",
@@ -146,6 +143,8 @@ rule coexistence_table:
     resources:
         runtime=5,
         mem_mb=1000,
+    params:
+        library=library("coexistence_table"),
     script:
         "../scripts/coexistence_table.py"
 

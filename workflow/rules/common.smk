@@ -1,21 +1,24 @@
-# Shared helpers: the study's curves from the configuration, library sources
-# as rule inputs (Snakemake does not track what a script imports).
+# Shared helpers: the configuration's validation, the study's curves from it, input and param functions.
 import dataclasses
 import os
 
 import yaml
 from snakemake.utils import validate
 
-from impact import comparison
-from impact.archive import archive_name
-from impact.experiment.grid import SCHEMA_PATH as RIG_SCHEMA
-from impact.experiment.grid import study_cases, validation_config
-from impact.numerics import stability_families, work_precision_pieces
-from impact.provenance import git_state
-from impact import loads
-from impact.design import IMPACT_KINDS, KINDS as DAMPER_KINDS, chart_specs
-from impact.robustness import design_names
-from impact.study import all_curves, check_config, curve_id, figure_curves, friction_scale
+from impact.stages import tables as comparison
+from impact.outputs.archive import archive_name
+from impact.outputs.code_deps import library_digest
+from impact.stages.validation.grid import SCHEMA_PATH as RIG_SCHEMA
+from impact.stages.validation.grid import study_cases, validation_config
+from impact.stages.numerics import stability_families, work_precision_pieces
+from impact.outputs.provenance import git_state
+from impact.stages import loads
+from impact.model.params import IMPACT_KINDS
+from impact.model.scene import DAMPER_KINDS
+from impact.stages.design import chart_specs
+from impact.stages.robustness import design_names
+from impact.stages.sweeps import all_curves, check_config, figure_curves, friction_scale
+from impact.model.params import curve_id
 
 check_config(config)
 
@@ -32,7 +35,7 @@ REPORT_DIR = os.path.dirname(OVERVIEW)
 SECTIONS = {
     "paper": "1. The paper's values beside ours",
     "figures": "2. The paper's figures",
-    "experiment": "3. Experiment (cross-validation)",
+    "validation": "3. Experiment (cross-validation)",
     "masri": "4. Closed form (Masri, 2 EIPC)",
     "coexistence": "5. Initial conditions and coexisting states",
     "numerics": "6. Numerics",
@@ -48,58 +51,19 @@ def figure_title(fig):
     return f"Fig. {number}: {title}" if title else f"Fig. {number}"
 
 
-def library(*names):
-    """Library source files a rule's script imports, as its inputs."""
-    return [os.path.join("src", "impact", name) for name in names]
+# the workflow's scripts, each named after its rule, and the library beside the workflow they import
+SCRIPTS = os.path.join(workflow.current_basedir, "..", "scripts")
+LIBRARY_SRC = os.path.join(workflow.current_basedir, "..", "..", "src")
 
 
-# the paper kernel shares its contact search (and so these modules) with the scene core
-LIB_CORE = library(
-    "__init__.py",
-    "params.py",
-    "_kernels.py",
-    "simulate.py",
-    "provenance.py",
-    "pipeline.py",
-    "io.py",
-    "core/__init__.py",
-    "core/events.py",
-    "core/segment.py",
-    "core/layout.py",
-    "core/jitcache.py",
-)
-LIB_SWEEP = LIB_CORE + library("dataset.py", "study.py", "readings.py", "masri.py")
-LIB_TMD = library("tmd.py", "pipeline.py", "io.py", "params.py")
-LIB_SCENE = LIB_CORE + library(
-    "scene.py", "building.py", "records.py", "core/contact.py", "core/modal.py", "core/run.py"
-)
-LIB_ROBUSTNESS = LIB_SCENE + library("robustness.py", "study.py")
-LIB_DESIGN = library("design.py", "tmd.py", "params.py", "pipeline.py", "io.py", "provenance.py")
-LIB_LOADS = LIB_SCENE + library("loads.py", "tmd.py")
-LIB_PLOT = library("plotting.py", "study.py", "pipeline.py", "io.py")
-LIB_TABLE = library("comparison.py", "study.py", "pipeline.py", "io.py")
-LIB_NUMERICS = LIB_CORE + library(
-    "numerics.py",
-    "baselines/__init__.py",
-    "baselines/_common.py",
-    "baselines/ivp.py",
-    "baselines/fixed_step.py",
-    "baselines/moreau.py",
-    "baselines/penalty.py",
-)
-LIB_EXPERIMENT = (
-    LIB_CORE
-    + library("core/sampler.py", "experiment/rig.schema.yaml")
-    + library(
-        *(
-            f"experiment/{m}.py"
-            for m in ("__init__", "grid", "records", "analysis", "rig", "model", "comparison", "claims", "plotting")
-        )
-    )
-    + library("experiment/validation.py")
-)
-LIB_REPORT = library("report.py", "provenance.py", "pipeline.py", "io.py")
-LIB_ARCHIVE = library("archive.py", "report.py", "provenance.py", "pipeline.py", "io.py")
+def library(script):
+    """The library code a rule's script runs: a digest of its transitive impact imports (code_deps), as a param.
+
+    Snakemake tracks the script itself, not what it imports; as a param the digest reruns exactly the jobs whose
+    scripts reach an edited file, and the scheduler has no library files to stat.
+    """
+    return library_digest(os.path.join(SCRIPTS, f"{script}.py"), LIBRARY_SRC)
+
 
 # one archive per commit, "-dirty" when the source tree has uncommitted changes
 ARCHIVE = f"results/archive/{archive_name(git_state()['git_commit'], git_state()['git_dirty'])}"
@@ -144,7 +108,7 @@ if LOADS:
     loads.check_config(LOADS)
 LOADS_BUILDINGS = list(loads.buildings(LOADS)) if LOADS else []
 LOADS_FAMILIES = loads.families(LOADS) if LOADS else []
-LOADS_KINDS = list(loads.KINDS)
+LOADS_KINDS = list(DAMPER_KINDS)
 COEXISTENCE_CURVES = config.get("coexistence", {}).get("curves", [])
 COEXISTENCE_MODES = config.get("coexistence", {}).get("modes", ["continuation_up", "continuation_down"])
 

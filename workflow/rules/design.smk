@@ -3,8 +3,6 @@
 
 
 rule design_sweep:
-    input:
-        library=LIB_SWEEP + LIB_DESIGN,
     output:
         "results/design/sweeps/{curve}.nc",
     log:
@@ -20,6 +18,7 @@ rule design_sweep:
         runtime=30,
         mem_mb=1000,
     params:
+        library=library("design_sweep"),
         study=design_curve_params,
     script:
         "../scripts/design_sweep.py"
@@ -28,7 +27,6 @@ rule design_sweep:
 rule design_chart:
     input:
         sweeps=design_chart_sweeps,
-        library=LIB_DESIGN,
     output:
         "results/design/chart_{kind}.nc",
     log:
@@ -44,6 +42,7 @@ rule design_chart:
         runtime=10,
         mem_mb=1000,
     params:
+        library=library("design_chart"),
         study=lambda wildcards: {key: config[key] for key in ("structure", "protocol", "design")},
     script:
         "../scripts/design_chart.py"
@@ -52,7 +51,6 @@ rule design_chart:
 rule design_figure:
     input:
         charts=expand(rules.design_chart.output[0], kind=DESIGN_KINDS),
-        library=LIB_DESIGN + LIB_PLOT,
     output:
         png=report(
             "results/figures/design_charts.png",
@@ -71,6 +69,8 @@ rule design_figure:
     resources:
         runtime=5,
         mem_mb=1000,
+    params:
+        library=library("design_figure"),
     script:
         "../scripts/design_figure.py"
 

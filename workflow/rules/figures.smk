@@ -5,7 +5,6 @@ rule figure:
     input:
         curves=lambda wc: [sweep_file(s) for s in figure_curves(config, wc.fig).values()],
         tmd=lambda wc: rules.tmd_optimum.output if needs_tmd(wc.fig) else [],
-        library=LIB_PLOT,
     output:
         png=report(
             "results/figures/{fig}.png",
@@ -27,9 +26,10 @@ rule figure:
         runtime=5,
         mem_mb=1000,
     params:
+        library=library("figure"),
         figure=lambda wc: config["figures"][wc.fig],
     script:
-        "../scripts/plot_figure.py"
+        "../scripts/figure.py"
 
 
 register(rules.figure, report=("png",), fig=FIGURES)

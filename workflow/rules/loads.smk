@@ -4,8 +4,6 @@
 
 
 rule loads_bare:
-    input:
-        library=LIB_LOADS,
     output:
         "results/loads/runs/{building}/bare.nc",
     log:
@@ -21,6 +19,7 @@ rule loads_bare:
         runtime=10,
         mem_mb=1000,
     params:
+        library=library("loads_bare"),
         study=loads_params,
     script:
         "../scripts/loads_bare.py"
@@ -29,7 +28,6 @@ rule loads_bare:
 rule loads_damper:
     input:
         bare=rules.loads_bare.output[0],
-        library=LIB_LOADS,
     output:
         "results/loads/runs/{building}/{damper}.nc",
     log:
@@ -46,6 +44,7 @@ rule loads_damper:
         runtime=20,
         mem_mb=1000,
     params:
+        library=library("loads_damper"),
         study=loads_params,
     script:
         "../scripts/loads_damper.py"
@@ -55,7 +54,6 @@ rule loads_collect:
     input:
         bare=expand(rules.loads_bare.output[0], building=LOADS_BUILDINGS),
         dampers=expand(rules.loads_damper.output[0], building=LOADS_BUILDINGS, damper=LOADS_KINDS),
-        library=LIB_LOADS,
     output:
         expand("results/loads/{family}.nc", family=LOADS_FAMILIES),
     log:
@@ -68,6 +66,8 @@ rule loads_collect:
     resources:
         runtime=5,
         mem_mb=2000,
+    params:
+        library=library("loads_collect"),
     script:
         "../scripts/loads_collect.py"
 
@@ -75,7 +75,6 @@ rule loads_collect:
 rule loads_tables:
     input:
         datasets=rules.loads_collect.output,
-        library=LIB_LOADS,
     output:
         best=report(
             "results/tables/loads_best_damper.csv",
@@ -99,6 +98,8 @@ rule loads_tables:
     resources:
         runtime=5,
         mem_mb=1000,
+    params:
+        library=library("loads_tables"),
     script:
         "../scripts/loads_tables.py"
 
@@ -106,7 +107,6 @@ rule loads_tables:
 rule loads_figure:
     input:
         datasets=rules.loads_collect.output,
-        library=LIB_LOADS + LIB_PLOT,
     output:
         png=report(
             "results/figures/loads_reduction.png",
@@ -125,6 +125,8 @@ rule loads_figure:
     resources:
         runtime=5,
         mem_mb=1000,
+    params:
+        library=library("loads_figure"),
     script:
         "../scripts/loads_figure.py"
 
@@ -137,7 +139,6 @@ rule loads_time_history:
             building=LOADS["time_history"]["building"],
             damper=LOADS["time_history"]["damper"],
         ),
-        library=LIB_LOADS,
     output:
         "results/loads/time_history.nc",
     log:
@@ -151,6 +152,7 @@ rule loads_time_history:
         runtime=5,
         mem_mb=1000,
     params:
+        library=library("loads_time_history"),
         study=lambda wildcards: LOADS,
     script:
         "../scripts/loads_time_history.py"
@@ -159,7 +161,6 @@ rule loads_time_history:
 rule loads_time_history_figure:
     input:
         dataset=rules.loads_time_history.output[0],
-        library=LIB_LOADS + LIB_PLOT,
     output:
         png=report(
             "results/figures/loads_time_history.png",
@@ -178,6 +179,8 @@ rule loads_time_history_figure:
     resources:
         runtime=5,
         mem_mb=1000,
+    params:
+        library=library("loads_time_history_figure"),
     script:
         "../scripts/loads_time_history_figure.py"
 

@@ -3,8 +3,6 @@
 
 
 rule masri_check:
-    input:
-        library=LIB_CORE + library("masri.py", "masri_check.py"),
     output:
         dataset="results/checks/masri.nc",
         table=report(
@@ -30,6 +28,7 @@ rule masri_check:
         runtime=30,
         mem_mb=1000,
     params:
+        library=library("masri_check"),
         grid=config["masri"]["grid"],
         structure=config["structure"],
         protocol={k: config["protocol"][k] for k in ("periods", "average_from")},
@@ -39,8 +38,6 @@ rule masri_check:
 
 
 rule masri_chart:
-    input:
-        library=library("masri.py", "masri_check.py", "params.py"),
     output:
         "results/checks/masri_chart.nc",
     log:
@@ -54,6 +51,7 @@ rule masri_chart:
         runtime=30,
         mem_mb=1000,
     params:
+        library=library("masri_chart"),
         chart=config["masri"]["chart"],
         structure=config["structure"],
     script:
@@ -61,8 +59,6 @@ rule masri_chart:
 
 
 rule masri_branches:
-    input:
-        library=LIB_CORE + library("masri.py", "masri_check.py"),
     output:
         "results/checks/masri_branches.nc",
     log:
@@ -76,6 +72,7 @@ rule masri_branches:
         runtime=30,
         mem_mb=1000,
     params:
+        library=library("masri_branches"),
         branches=config["masri"]["branches"],
         structure=config["structure"],
         protocol={k: config["protocol"][k] for k in ("periods", "average_from")},
@@ -88,7 +85,6 @@ rule masri_figures:
     input:
         chart=rules.masri_chart.output[0],
         branches=rules.masri_branches.output[0],
-        library=LIB_PLOT,
     output:
         chart_png=report(
             "results/figures/masri_stability.png",
@@ -114,8 +110,10 @@ rule masri_figures:
     resources:
         runtime=5,
         mem_mb=1000,
+    params:
+        library=library("masri_figures"),
     script:
-        "../scripts/plot_masri.py"
+        "../scripts/masri_figures.py"
 
 
 if MASRI:

@@ -5,8 +5,6 @@
 
 
 rule numerics_work_precision_piece:
-    input:
-        library=LIB_NUMERICS,
     output:
         "results/numerics/work_precision/{case}/{family}.nc",
     log:
@@ -20,6 +18,7 @@ rule numerics_work_precision_piece:
         runtime=30,
         mem_mb=2000,
     params:
+        library=library("numerics_work_precision_piece"),
         numerics=config.get("numerics", {}),
     script:
         "../scripts/numerics_work_precision_piece.py"
@@ -31,7 +30,6 @@ rule numerics_work_precision:
             expand(rules.numerics_work_precision_piece.output[0], case=case, family=fam)[0]
             for case, fam in NUMERICS_PIECES
         ],
-        library=LIB_NUMERICS,
     output:
         dataset="results/numerics/work_precision.nc",
         speed=report(
@@ -51,14 +49,13 @@ rule numerics_work_precision:
         runtime=5,
         mem_mb=2000,
     params:
+        library=library("numerics_work_precision"),
         numerics=config.get("numerics", {}),
     script:
         "../scripts/numerics_work_precision.py"
 
 
 rule numerics_stability_piece:
-    input:
-        library=LIB_NUMERICS,
     output:
         "results/numerics/stability/{family}.csv",
     log:
@@ -72,6 +69,7 @@ rule numerics_stability_piece:
         runtime=30,
         mem_mb=2000,
     params:
+        library=library("numerics_stability_piece"),
         numerics=config.get("numerics", {}),
     script:
         "../scripts/numerics_stability_piece.py"
@@ -80,7 +78,6 @@ rule numerics_stability_piece:
 rule numerics_stability:
     input:
         pieces=expand(rules.numerics_stability_piece.output[0], family=STABILITY_FAMILIES),
-        library=LIB_NUMERICS,
     output:
         table=report(
             "results/tables/numerics_stability.csv",
@@ -99,6 +96,7 @@ rule numerics_stability:
         runtime=5,
         mem_mb=2000,
     params:
+        library=library("numerics_stability"),
         numerics=config.get("numerics", {}),
     script:
         "../scripts/numerics_stability.py"
@@ -108,7 +106,6 @@ rule numerics_figures:
     input:
         dataset=rules.numerics_work_precision.output.dataset,
         stability=rules.numerics_stability.output.table,
-        library=LIB_PLOT + library("provenance.py"),
     output:
         work_png=report(
             "results/figures/numerics_error_runtime.png",
@@ -134,8 +131,10 @@ rule numerics_figures:
     resources:
         runtime=5,
         mem_mb=1000,
+    params:
+        library=library("numerics_figures"),
     script:
-        "../scripts/plot_numerics.py"
+        "../scripts/numerics_figures.py"
 
 
 if NUMERICS:

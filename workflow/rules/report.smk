@@ -10,7 +10,6 @@ rule report:
         overview=OVERVIEW,
         template=os.path.join(REPORT_DIR, "index.html.j2"),
         benchmarks=lambda wildcards: study_benchmarks(),
-        library=LIB_REPORT,
     output:
         "results/report/index.html",
     log:
@@ -25,9 +24,10 @@ rule report:
         # a resource, not a param: shown in the report, but another executor reruns nothing
         executor=executor_name,
     params:
+        library=library("report"),
         sections=lambda wildcards: report_sections(),
     script:
-        "../scripts/build_report.py"
+        "../scripts/report.py"
 
 
 rule archive:
@@ -35,7 +35,6 @@ rule archive:
         products=lambda wildcards: study_outputs(),
         report=rules.report.output[0],
         config=[os.path.relpath(f) for f in workflow.configfiles],
-        library=LIB_ARCHIVE,
     output:
         ARCHIVE,
     log:
@@ -47,5 +46,7 @@ rule archive:
     resources:
         runtime=10,
         mem_mb=1000,
+    params:
+        library=library("archive"),
     script:
-        "../scripts/build_archive.py"
+        "../scripts/archive.py"

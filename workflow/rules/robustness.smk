@@ -7,7 +7,6 @@ rule robustness_designs:
     input:
         sweeps=robustness_sweeps,
         tmd=rules.tmd_optimum.output[0],
-        library=LIB_ROBUSTNESS,
     output:
         "results/robustness/designs.json",
     log:
@@ -21,6 +20,7 @@ rule robustness_designs:
         runtime=5,
         mem_mb=1000,
     params:
+        library=library("robustness_designs"),
         study=robustness_params,
     script:
         "../scripts/robustness_designs.py"
@@ -29,7 +29,6 @@ rule robustness_designs:
 rule robustness_design:
     input:
         designs=rules.robustness_designs.output[0],
-        library=LIB_ROBUSTNESS,
     output:
         "results/robustness/{design}.nc",
     log:
@@ -45,6 +44,7 @@ rule robustness_design:
         runtime=30,
         mem_mb=1000,
     params:
+        library=library("robustness_design"),
         study=robustness_params,
     script:
         "../scripts/robustness_design.py"
@@ -53,7 +53,6 @@ rule robustness_design:
 rule robustness_table:
     input:
         designs=expand(rules.robustness_design.output[0], design=ROBUSTNESS_DESIGNS),
-        library=LIB_ROBUSTNESS,
     output:
         report(
             "results/tables/table1_measured.csv",
@@ -71,6 +70,8 @@ rule robustness_table:
     resources:
         runtime=5,
         mem_mb=1000,
+    params:
+        library=library("robustness_table"),
     script:
         "../scripts/robustness_table.py"
 
@@ -78,7 +79,6 @@ rule robustness_table:
 rule robustness_figure:
     input:
         designs=expand(rules.robustness_design.output[0], design=ROBUSTNESS_DESIGNS),
-        library=LIB_ROBUSTNESS + LIB_PLOT,
     output:
         png=report(
             "results/figures/robustness.png",
@@ -97,6 +97,8 @@ rule robustness_figure:
     resources:
         runtime=5,
         mem_mb=1000,
+    params:
+        library=library("robustness_figure"),
     script:
         "../scripts/robustness_figure.py"
 

@@ -3,8 +3,6 @@
 
 
 rule sweep_curve:
-    input:
-        library=LIB_SWEEP,
     output:
         "results/sweeps/{curve}.nc",
     log:
@@ -20,6 +18,7 @@ rule sweep_curve:
         runtime=30,
         mem_mb=1000,
     params:
+        library=library("sweep_curve"),
         study=curve_params,
     script:
         "../scripts/sweep_curve.py"

@@ -5,7 +5,6 @@ rule paper_vs_reproduced:
     input:
         curves=table_curves,
         tmd=rules.tmd_optimum.output[0],
-        library=LIB_TABLE,
     output:
         report(
             "results/tables/paper_vs_reproduced.csv",
@@ -23,6 +22,8 @@ rule paper_vs_reproduced:
     resources:
         runtime=5,
         mem_mb=1000,
+    params:
+        library=library("paper_vs_reproduced"),
     script:
         "../scripts/paper_vs_reproduced.py"
 

@@ -2,8 +2,6 @@
 
 
 rule tmd_optimum:
-    input:
-        library=LIB_TMD,
     output:
         report(
             "results/tables/tmd_optimum.json",
@@ -22,6 +20,7 @@ rule tmd_optimum:
         runtime=5,
         mem_mb=500,
     params:
+        library=library("tmd_optimum"),
         mu=config["tmd"]["mu"],
         beta=config["structure"]["beta"],
         force_ratio=config["structure"]["force_ratio"],

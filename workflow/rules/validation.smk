@@ -7,7 +7,6 @@
 rule validation_contact_laws:
     input:
         rig_config=RIG_FILE,
-        library=LIB_EXPERIMENT,
     output:
         "results/validation/contact_laws.json",
     log:
@@ -21,6 +20,7 @@ rule validation_contact_laws:
         runtime=5,
         mem_mb=1000,
     params:
+        library=library("validation_contact_laws"),
         rig=RIG,
     script:
         "../scripts/validation_contact_laws.py"
@@ -30,7 +30,6 @@ rule validation_case:
     input:
         rig_config=RIG_FILE,
         contact_laws=rules.validation_contact_laws.output[0],
-        library=LIB_EXPERIMENT,
     output:
         "results/validation/cases/{case}.json",
     log:
@@ -44,6 +43,7 @@ rule validation_case:
         runtime=10,
         mem_mb=1000,
     params:
+        library=library("validation_case"),
         rig=RIG,
         case=lambda wc: RIG_CASES[wc.case],
     script:
@@ -53,12 +53,11 @@ rule validation_case:
 rule validation_grid:
     input:
         cases=expand(rules.validation_case.output[0], case=list(RIG_CASES)),
-        library=library("experiment/validation.py", "io.py", "pipeline.py"),
     output:
         table=report(
             "results/validation/validation_table.csv",
             caption="../report/cross_validation.rst",
-            category=SECTIONS["experiment"],
+            category=SECTIONS["validation"],
             subcategory="Model against the virtual rig",
         ),
         curves="results/validation/validation_curves.csv",
@@ -73,6 +72,8 @@ rule validation_grid:
     resources:
         runtime=5,
         mem_mb=1000,
+    params:
+        library=library("validation_grid"),
     script:
         "../scripts/validation_grid.py"
 
@@ -81,7 +82,6 @@ rule validation_drop_tests:
     input:
         rig_config=RIG_FILE,
         contact_laws=rules.validation_contact_laws.output[0],
-        library=LIB_EXPERIMENT,
     output:
         table="results/validation/drop_tests.csv",
         records=directory("results/validation/records/drop_tests"),
@@ -96,6 +96,7 @@ rule validation_drop_tests:
         runtime=5,
         mem_mb=1000,
     params:
+        library=library("validation_drop_tests"),
         rig=RIG,
     script:
         "../scripts/validation_drop_tests.py"
@@ -105,7 +106,6 @@ rule validation_fig3_data:
     input:
         rig_config=RIG_FILE,
         contact_laws=rules.validation_contact_laws.output[0],
-        library=LIB_EXPERIMENT,
     output:
         data="results/validation/fig3_data.json",
         decay="results/validation/fig3a_decay.csv",
@@ -124,6 +124,7 @@ rule validation_fig3_data:
         runtime=10,
         mem_mb=1000,
     params:
+        library=library("validation_figure_data"),
         rig=RIG,
     script:
         "../scripts/validation_figure_data.py"
@@ -133,7 +134,6 @@ rule validation_fig5_data:
     input:
         rig_config=RIG_FILE,
         contact_laws=rules.validation_contact_laws.output[0],
-        library=LIB_EXPERIMENT,
     output:
         data="results/validation/fig5_data.json",
         decay="results/validation/fig5a_decay.csv",
@@ -152,6 +152,7 @@ rule validation_fig5_data:
         runtime=10,
         mem_mb=1000,
     params:
+        library=library("validation_figure_data"),
         rig=RIG,
     script:
         "../scripts/validation_figure_data.py"
@@ -164,12 +165,11 @@ rule validation_claims:
         fig3=rules.validation_fig3_data.output.data,
         fig5=rules.validation_fig5_data.output.data,
         drop_tests=rules.validation_drop_tests.output.table,
-        library=LIB_EXPERIMENT,
     output:
         report(
             "results/validation/claims.json",
             caption="../report/validation_claims.rst",
-            category=SECTIONS["experiment"],
+            category=SECTIONS["validation"],
             subcategory="The paper's Section 3 claims",
         ),
     log:
@@ -183,6 +183,7 @@ rule validation_claims:
         runtime=5,
         mem_mb=1000,
     params:
+        library=library("validation_claims"),
         rig=RIG,
         smoke=VALIDATION.get("smoke", False),
     script:
@@ -193,19 +194,18 @@ rule validation_figures:
     input:
         fig3=rules.validation_fig3_data.output.data,
         fig5=rules.validation_fig5_data.output.data,
-        library=LIB_EXPERIMENT + library("plotting.py"),
     output:
         fig3=report(
             "results/validation/fig3.png",
             caption="../report/validation_fig3.rst",
-            category=SECTIONS["experiment"],
+            category=SECTIONS["validation"],
             subcategory="Fig. 3: the bare structure",
         ),
         fig3_pdf="results/validation/fig3.pdf",
         fig5=report(
             "results/validation/fig5.png",
             caption="../report/validation_fig5.rst",
-            category=SECTIONS["experiment"],
+            category=SECTIONS["validation"],
             subcategory="Fig. 5: the PID",
         ),
         fig5_pdf="results/validation/fig5.pdf",
@@ -220,6 +220,8 @@ rule validation_figures:
     resources:
         runtime=5,
         mem_mb=1000,
+    params:
+        library=library("validation_figures"),
     script:
         "../scripts/validation_figures.py"
 

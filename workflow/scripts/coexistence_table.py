@@ -3,10 +3,10 @@ import json
 
 import xarray as xr
 
-from impact.comparison import X_M_AT_OPTIMUM, closed_form_statement, coexistence_table, e_trend_statement
-from impact.io import write_csv_atomic, write_json_atomic
-from impact.pipeline import logged
-from impact.study import curve_id
+from impact.model.params import curve_id
+from impact.outputs.files import write_csv_atomic, write_json_atomic
+from impact.outputs.job_log import logged
+from impact.stages.tables import X_M_AT_OPTIMUM, closed_form_statement, coexistence_table, e_trend_statement
 
 with logged(snakemake.log[0]) as log:
     paper = {curve_id(spec): value for _, _, spec, value in X_M_AT_OPTIMUM}

@@ -1,7 +1,7 @@
 """Glue: one curve's continuation sweeps (one direction) -> netCDF."""
-from impact.io import write_dataset
-from impact.pipeline import log_versions, logged
-from impact.study import run_curve
+from impact.outputs.files import write_dataset
+from impact.outputs.job_log import log_versions, logged
+from impact.stages.sweeps import run_curve
 
 with logged(snakemake.log[0]) as log:
     log_versions()

@@ -1,10 +1,10 @@
 """Glue: one damper's chart sweeps (or the TMD's closed form) -> results/design/chart_<damper>.nc."""
 import xarray as xr
 
-from impact.design import chart_config, impact_chart, tmd_chart, tmd_mu_grid
-from impact.io import write_dataset
-from impact.pipeline import logged
-from impact.study import freq_grid
+from impact.outputs.files import write_dataset
+from impact.outputs.job_log import logged
+from impact.stages.design import chart_config, impact_chart, tmd_chart, tmd_mu_grid
+from impact.stages.sweeps import freq_grid
 
 with logged(snakemake.log[0]) as log:
     study, kind = snakemake.params.study, snakemake.wildcards.kind

@@ -1,8 +1,8 @@
 """Glue: one chart sweep on the charts' frequency window -> results/design/sweeps/<curve>.nc."""
-from impact.design import chart_config
-from impact.io import write_dataset
-from impact.pipeline import log_versions, logged
-from impact.study import run_curve
+from impact.outputs.files import write_dataset
+from impact.outputs.job_log import log_versions, logged
+from impact.stages.design import chart_config
+from impact.stages.sweeps import run_curve
 
 with logged(snakemake.log[0]) as log:
     log_versions()

@@ -1,11 +1,11 @@
 """Glue: one curve over an ensemble of starting states -> netCDF."""
 import json
 
-from impact.coexistence import ensemble_members, run_ensemble
-from impact.io import write_dataset
-from impact.params import Protocol
-from impact.pipeline import log_versions, logged
-from impact.provenance import attributes
+from impact.model.params import Protocol
+from impact.outputs.files import write_dataset
+from impact.outputs.job_log import log_versions, logged
+from impact.outputs.provenance import attributes
+from impact.stages.coexistence import ensemble_members, run_ensemble
 
 with logged(snakemake.log[0]) as log:
     log_versions()

@@ -3,9 +3,9 @@ from pathlib import Path
 
 import xarray as xr
 
-from impact.io import write_dataset
-from impact.loads import collect
-from impact.pipeline import logged
+from impact.outputs.files import write_dataset
+from impact.outputs.job_log import logged
+from impact.stages.loads import collect
 
 with logged(snakemake.log[0]):
     bare = {Path(p).parent.name: xr.load_dataset(p) for p in snakemake.input.bare}

@@ -1,9 +1,9 @@
 """Glue: one damper type on one building -> results/loads/runs/<building>/<damper>.nc."""
 import xarray as xr
 
-from impact.io import write_dataset
-from impact.loads import damper_runs
-from impact.pipeline import log_versions, logged
+from impact.outputs.files import write_dataset
+from impact.outputs.job_log import log_versions, logged
+from impact.stages.loads import damper_runs
 
 with logged(snakemake.log[0]) as log:
     log_versions()

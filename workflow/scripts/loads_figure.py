@@ -3,8 +3,8 @@ from pathlib import Path
 
 import xarray as xr
 
-from impact.pipeline import logged
-from impact.plotting import plot_loads_reduction
+from impact.outputs.job_log import logged
+from impact.outputs.plotting import plot_loads_reduction
 
 with logged(snakemake.log[0]):
     datasets = {Path(p).stem: xr.load_dataset(p) for p in snakemake.input.datasets}

@@ -1,9 +1,9 @@
 """Glue: one case in time (the configured building, record and damper at its best gap)."""
 import xarray as xr
 
-from impact.io import write_dataset
-from impact.loads import time_history
-from impact.pipeline import log_versions, logged
+from impact.outputs.files import write_dataset
+from impact.outputs.job_log import log_versions, logged
+from impact.stages.loads import time_history
 
 with logged(snakemake.log[0]) as log:
     log_versions()

@@ -1,9 +1,9 @@
 """Glue: closed-form branches along r and runs from rest -> dataset."""
-from impact.io import write_dataset
-from impact.masri_check import branches_dataset
-from impact.params import Protocol
-from impact.pipeline import logged
-from impact.provenance import attributes
+from impact.model.params import Protocol
+from impact.outputs.files import write_dataset
+from impact.outputs.job_log import logged
+from impact.outputs.provenance import attributes
+from impact.stages.masri.check import branches_dataset
 
 with logged(snakemake.log[0]):
     p = snakemake.params

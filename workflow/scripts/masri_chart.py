@@ -1,8 +1,8 @@
 """Glue: the closed form's existence/stability chart -> dataset."""
-from impact.io import write_dataset
-from impact.masri_check import chart_dataset
-from impact.pipeline import logged
-from impact.provenance import attributes
+from impact.outputs.files import write_dataset
+from impact.outputs.job_log import logged
+from impact.outputs.provenance import attributes
+from impact.stages.masri.charts import chart_dataset
 
 with logged(snakemake.log[0]):
     p = snakemake.params

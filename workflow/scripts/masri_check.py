@@ -1,10 +1,9 @@
 """Glue: the closed-form check over a grid -> dataset, table and summary."""
-from impact.io import write_csv_atomic, write_dataset, write_json_atomic
-from impact.masri_check import limits_statement, run_check, summary, to_dataset
-from impact.params import Protocol
-from impact.pipeline import logged
-from impact.provenance import attributes
-from impact.simulate import frequency_grid
+from impact.model.params import Protocol, frequency_grid
+from impact.outputs.files import write_csv_atomic, write_dataset, write_json_atomic
+from impact.outputs.job_log import logged
+from impact.outputs.provenance import attributes
+from impact.stages.masri.check import limits_statement, run_check, summary, to_dataset
 
 with logged(snakemake.log[0]) as log:
     p = snakemake.params

@@ -1,9 +1,9 @@
 """Glue: every family's runs on the extreme cases -> the stability table, judged against the exact core."""
 import pandas as pd
 
-from impact.io import write_csv_atomic
-from impact.numerics import stability_table
-from impact.pipeline import logged
+from impact.outputs.files import write_csv_atomic
+from impact.outputs.job_log import logged
+from impact.stages.numerics import stability_table
 
 with logged(snakemake.log[0]):
     # round_trip: every number as the piece wrote it, so the judgement sees the runs' own values

@@ -1,10 +1,10 @@
 """Glue: the pieces (case x method family) -> the work-precision dataset and the speed-at-equal-error table."""
 import xarray as xr
 
-from impact.io import write_csv_atomic, write_dataset
-from impact.numerics import combine_work_precision, speed_at_equal_error
-from impact.pipeline import logged
-from impact.provenance import package_versions
+from impact.outputs.files import write_csv_atomic, write_dataset
+from impact.outputs.job_log import logged
+from impact.outputs.provenance import package_versions
+from impact.stages.numerics import combine_work_precision, speed_at_equal_error
 
 with logged(snakemake.log[0]) as log:
     ds = combine_work_precision([xr.load_dataset(p) for p in snakemake.input.pieces], snakemake.params.numerics)

@@ -3,9 +3,9 @@ import json
 
 import xarray as xr
 
-from impact.comparison import paper_vs_reproduced
-from impact.io import write_csv_atomic
-from impact.pipeline import logged
+from impact.outputs.files import write_csv_atomic
+from impact.outputs.job_log import logged
+from impact.stages.tables import paper_vs_reproduced
 
 with logged(snakemake.log[0]) as log:
     datasets = {}

@@ -1,11 +1,11 @@
 """Glue: one design point -> its X_m along every variation that applies (results/robustness/<design>.nc)."""
 import json
 
-from impact.io import write_dataset
-from impact.params import Protocol
-from impact.pipeline import log_versions, logged
-from impact.robustness import Design, design_dataset, grids, stroke_cap
-from impact.study import freq_grid
+from impact.model.params import Protocol
+from impact.outputs.files import write_dataset
+from impact.outputs.job_log import log_versions, logged
+from impact.stages.robustness import Design, design_dataset, grids, stroke_cap
+from impact.stages.sweeps import freq_grid
 
 with logged(snakemake.log[0]) as log:
     log_versions()

@@ -3,8 +3,8 @@ from pathlib import Path
 
 import xarray as xr
 
-from impact.pipeline import logged
-from impact.plotting import plot_robustness
+from impact.outputs.job_log import logged
+from impact.outputs.plotting import plot_robustness
 
 with logged(snakemake.log[0]):
     designs = {Path(p).stem: xr.load_dataset(p) for p in snakemake.input.designs}

@@ -1,7 +1,7 @@
 """Glue: the optimum TMD -> results/tables/tmd_optimum.json."""
-from impact.io import write_json_atomic
-from impact.pipeline import logged
-from impact.tmd import den_hartog, tmd_optimum
+from impact.closed_form.tmd import den_hartog, tmd_optimum
+from impact.outputs.files import write_json_atomic
+from impact.outputs.job_log import logged
 
 with logged(snakemake.log[0]) as log:
     p = snakemake.params

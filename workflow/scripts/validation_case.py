@@ -1,7 +1,7 @@
 """Glue: one case of the rig's grid -> model against rig, as one JSON file."""
-from impact.experiment.grid import Case
-from impact.experiment.validation import adopt_contact_laws, write_case
-from impact.pipeline import logged
+from impact.outputs.job_log import logged
+from impact.stages.validation.grid import Case
+from impact.stages.validation.steps import adopt_contact_laws, write_case
 
 with logged(snakemake.log[0]) as log:
     adopt_contact_laws(snakemake.input.contact_laws)

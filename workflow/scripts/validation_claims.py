@@ -1,6 +1,6 @@
 """Glue: the grid's tables, the figures' data and the drop tests -> the paper's Sect. 3 claims."""
-from impact.experiment.validation import write_claims
-from impact.pipeline import logged
+from impact.outputs.job_log import logged
+from impact.stages.validation.steps import write_claims
 
 with logged(snakemake.log[0]):
     i = snakemake.input

@@ -1,6 +1,6 @@
 """Glue: the rig's configuration -> the data of Fig. 3 or Fig. 5 (JSON, tables, records)."""
-from impact.experiment.validation import adopt_contact_laws, write_fig3_data, write_fig5_data
-from impact.pipeline import logged
+from impact.outputs.job_log import logged
+from impact.stages.validation.steps import adopt_contact_laws, write_fig3_data, write_fig5_data
 
 with logged(snakemake.log[0]):
     adopt_contact_laws(snakemake.input.contact_laws)

@@ -1,6 +1,6 @@
 """Glue: every case's JSON -> the grid's tables (per case, per case and r, per amplitude bin)."""
-from impact.experiment.validation import write_grid_tables
-from impact.pipeline import logged
+from impact.outputs.job_log import logged
+from impact.stages.validation.steps import write_grid_tables
 
 with logged(snakemake.log[0]) as log:
     out = snakemake.output

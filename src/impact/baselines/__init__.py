@@ -1,6 +1,6 @@
 """Baseline integrators the exact event-driven core is compared against.
 
-These are *not* the production path (that is :mod:`impact.simulate`); they are
+These are *not* the production path (that is :mod:`impact.engine.paper`); they are
 standard, independent ways of integrating the same CID / PID models
 (``docs/model.md``) so the study can report how the exact core compares with
 what a practitioner would otherwise write:
@@ -34,11 +34,11 @@ The pieces the four methods share live in :mod:`._common`; this module only
 re-exports the public names.
 """
 
-from ._common import BaselineResult, impact_law
-from .fixed_step import simulate_rk4
-from .ivp import simulate_ivp
-from .moreau import simulate_moreau_jean
-from .penalty import simulate_penalty
+from impact.baselines._common import BaselineResult, impact_law
+from impact.baselines.fixed_step import simulate_rk4
+from impact.baselines.ivp import simulate_ivp
+from impact.baselines.moreau import simulate_moreau_jean
+from impact.baselines.penalty import simulate_penalty
 
 METHODS = {
     "ivp": simulate_ivp,

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..params import STARTS, System
+from impact.model.params import STARTS, System
 
 #: default relative velocity (in units of force_ratio * omega) below which a
 #: rebound is merged into sustained contact (e = 0, end of a chatter sequence)
@@ -77,7 +77,7 @@ def merged_velocity(mu: float, xd: float, yd: float) -> float:
 
 def check_inputs(system: System, r: float, t_end: float, t_window: float, start: str) -> None:
     if not isinstance(system, System):
-        raise TypeError("system must be an impact.params.System")
+        raise TypeError("system must be an impact.model.params.System")
     if not (math.isfinite(r) and r > 0.0):
         raise ValueError(f"r = {r!r} must be a positive finite frequency ratio")
     if not (math.isfinite(t_end) and t_end > 0.0):

@@ -32,8 +32,7 @@ import math
 
 import numpy as np
 
-from ..params import System
-from ._common import (
+from impact.baselines._common import (
     H_STICK,
     ZENO_IMPACTS,
     Affine,
@@ -52,6 +51,7 @@ from ._common import (
     stuck_affine,
     stuck_exit_functionals,
 )
+from impact.model.params import System
 
 MAX_IDLE_STEPS = 1000
 

@@ -50,8 +50,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from ..params import System
-from ._common import (
+from impact.baselines._common import (
     H_STICK,
     S_VEL,
     ZENO_IMPACTS,
@@ -74,6 +73,7 @@ from ._common import (
     stuck_exit_functionals,
     wall_gap,
 )
+from impact.model.params import System
 
 IVP_METHODS = ("RK45", "DOP853", "Radau", "LSODA", "BDF", "RK23")
 _IMPLICIT = ("Radau", "BDF", "LSODA")

@@ -44,8 +44,8 @@ from __future__ import annotations
 
 import math
 
-from ..params import System
-from ._common import ImpactLog, TrapzWindow, check_inputs, initial_state, make_result
+from impact.baselines._common import ImpactLog, TrapzWindow, check_inputs, initial_state, make_result
+from impact.model.params import System
 
 
 def _step_matrices(system: System, h: float, theta: float):

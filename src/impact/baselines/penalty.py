@@ -27,9 +27,9 @@ from __future__ import annotations
 
 import math
 
-from ..params import System
-from . import _common as common
-from .ivp import MAX_IDLE_PHASES, Segments
+from impact.baselines import _common as common
+from impact.baselines.ivp import MAX_IDLE_PHASES, Segments
+from impact.model.params import System
 
 
 def dashpot(system: System, stiffness: float) -> tuple[float, float]:

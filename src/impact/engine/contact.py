@@ -1,0 +1,163 @@
+"""Contact of the damper units with their walls: impacts, sticking, release.
+
+Impacts on one floor at one instant are solved together.  Each contact k
+(a unit hitting the wall on side_k, or a unit resting against a wall of the
+same floor) gets an impulse P_k >= 0 pushing it off its wall; its floor gets
+the opposite.  With u_k = side_k (w_k - v_floor) the approach speed,
+
+    u_k+ = u_k- - sum_l W_kl P_l,   W_kl = delta_kl / m_k + side_k side_l / M_floor,
+
+and Newton's law u_k+ = -e_k u_k- holds on every contact with P_k > 0, while a
+contact with P_k = 0 separates at least that fast.  This linear
+complementarity problem is solved by an active set; n identical units
+hitting together get identical impulses and move as one unit of their total
+mass.  Floors do not exchange impulses (the storeys are springs), so floors
+are independent.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from impact.engine.layout import MODE_LOCKED
+from impact.engine.segment import bound, deriv_at0
+
+#: relative velocity below which a rebound is treated as sticking, in units of the load's velocity scale
+#: (F0/K * omega for the paper's system); far below any resolved rebound
+STICK_VELOCITY = 1e-8
+_ZERO_TOL = 1e-10  # relative size below which a derivative counts as zero
+
+
+@njit(cache=True)
+def floor_mass(f, building, units, mode):
+    """Mass that moves with floor f under an impulse: the floor and its locked units."""
+    m = building[0][f]
+    ufloor, um = units[1], units[2]
+    for j in range(um.shape[0]):
+        if ufloor[j] == f and mode[j] == MODE_LOCKED:
+            m += um[j]
+    return m
+
+
+@njit(cache=True)
+def solve_impulses(u, minv, side, e, count, m_floor, impulse):
+    """Active-set solution of the impact LCP on one floor (see module docstring).
+
+    Contacts come in groups of count[k] identical units (same side, mass,
+    restitution and approach speed, bit for bit): a group shares one impulse,
+    so identical units stay identical to the last bit.
+    """
+    n = u.shape[0]
+    if n == 1:
+        # one group: Newton's law with the reduced mass, or no impulse at all
+        impulse[0] = max((1.0 + e[0]) * u[0] / (minv[0] + count[0] / m_floor), 0.0)
+        return
+    active = np.ones(n, dtype=np.bool_)
+    for _ in range(4 * n + 4):
+        idx = np.nonzero(active)[0]
+        na = idx.shape[0]
+        for k in range(n):
+            impulse[k] = 0.0
+        if na > 0:
+            w = np.empty((na, na))
+            rhs = np.empty(na)
+            for a in range(na):
+                k = idx[a]
+                rhs[a] = (1.0 + e[k]) * u[k]
+                for b in range(na):
+                    l = idx[b]
+                    w[a, b] = side[k] * side[l] * count[l] / m_floor + (minv[k] if k == l else 0.0)
+            sol = np.linalg.solve(w, rhs)
+            worst = 0
+            most = 0.0
+            for a in range(na):
+                if sol[a] < most:
+                    most = sol[a]
+                    worst = idx[a]
+            if most < 0.0:
+                active[worst] = False
+                continue
+            for a in range(na):
+                impulse[idx[a]] = sol[a]
+        # a contact left out must separate at least as fast as Newton's law says
+        added = False
+        for k in range(n):
+            if active[k]:
+                continue
+            uk = u[k] - impulse[k] * minv[k]
+            for l in range(n):
+                uk -= side[k] * side[l] * count[l] * impulse[l] / m_floor
+            if uk > -e[k] * u[k] * (1.0 + 1e-12) + 1e-300:
+                if u[k] > 0.0:
+                    active[k] = True
+                    added = True
+        if not added:
+            return
+
+
+@njit(cache=True)
+def stuck_row(kap, C, P, f, side, acc0, acc1, level, cq, pq):
+    """Contact-force row of a unit resting on wall `side` of floor f: it stays while q <= 0.
+
+    q = side (x_f'' - a(tau)) + level, with a = acc0 + acc1 tau the unit's load
+    acceleration and level = wp^2 d/2 - a_f (spring pull at the wall, friction).
+    """
+    for k in range(kap.shape[0]):
+        cq[k] = side * C[f, k] * kap[k] * kap[k]
+    pq[0] = side * (2.0 * P[f, 2] - acc0) + level
+    pq[1] = side * (6.0 * P[f, 3] - acc1)
+    pq[2] = 0.0
+    pq[3] = 0.0
+
+
+@njit(cache=True)
+def floor_row(kap, C, P, f, acc0, acc1, cq, pq):
+    """x_f'' - a(tau): the friction force per unit mass needed to drag a unit along."""
+    stuck_row(kap, C, P, f, 1.0, acc0, acc1, 0.0, cq, pq)
+
+
+@njit(cache=True)
+def stays(kap, cq, pq):
+    """Whether q <= 0 holds just after tau = 0 (first clearly non-zero derivative)."""
+    for n in range(0, 4):
+        qn = deriv_at0(kap, cq, pq, n)
+        scale = bound(kap, cq, pq, n, 0.0)
+        if abs(qn) > _ZERO_TOL * scale:
+            return qn < 0.0
+    return True
+
+
+@njit(cache=True)
+def slide_decision(q, scale, a_f, zero_tol):
+    """Friction, s' = 0 away from the walls: stick to the floor (0) or slide (sigma = -+1).
+
+    q[0] is the acceleration the floor's friction must match (it can give at most a_f) and q[1:] its
+    next derivatives at this instant, scale[n] a bound of each.  A tie within zero_tol is decided by the
+    first derivative that is not zero.  If the drive is harder to the right, the mass lags behind and
+    slides with s' < 0.
+    """
+    x2 = q[0]
+    tol = zero_tol * (scale[0] + a_f)
+    if x2 > a_f + tol:
+        return -1
+    if x2 < -a_f - tol:
+        return 1
+    if abs(x2) < a_f - tol:
+        return 0
+    sgn = 1 if x2 > 0.0 else -1
+    for n in range(1, q.shape[0]):
+        if abs(q[n]) > zero_tol * scale[n]:
+            return -sgn if sgn * q[n] > 0.0 else 0
+    return 0
+
+
+@njit(cache=True)
+def floor_decision(kap, cq, pq, a_f):
+    """slide_decision for a unit on a floor: sticking needs |x_f'' - a| <= a_f (row cq, pq)."""
+    q = np.empty(4)
+    scale = np.empty(4)
+    for n in range(4):
+        q[n] = deriv_at0(kap, cq, pq, n)
+        scale[n] = bound(kap, cq, pq, n, 0.0)
+    return slide_decision(q, scale, a_f, _ZERO_TOL)

@@ -1,0 +1,369 @@
+"""Certified searches on one coefficient-form row: the first exit from a band, and the peak.
+
+On [a, b] a function with |h''| <= M2 stays within max(h(a), h(b)) + M2 (b-a)^2 / 8.
+The contact search accepts a step only when a bound of this kind keeps h inside
+its band, so a contact cannot be missed however briefly it lasts; a crossing is
+refined by safeguarded Newton once monotonicity is certified.  Three bounds
+certify a step, whichever holds: that one; h' of one sign (with |h'''| <= M3, h'
+stays within its end values widened by M3 (b-a)^2 / 8), so that h lies between
+its end values; and the cubic Hermite interpolant of h's values and slopes at
+both ends, within M4 (b-a)^4 / 384 of h.  The last two let one step span most
+of a flight between the walls.  The first bound also prunes the peak search: an
+interval whose bound cannot beat the running peak is dropped, and the others are
+split or searched for a zero of h'.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from impact.engine.segment import bound_tab, deriv_at0, eval2, eval3
+
+HMIN = 1e-12       # smallest step before a touch is declared tangential
+_EPS = 2.220446049250313e-16
+PEAK_RTOL = 1e-12  # the peak search stops refining an interval within this of the running peak
+PEAK_MAX_VISITS = 100000  # a function of pure round-off could split forever: give up, and say so
+
+
+@njit(cache=True)
+def _newton_in_bracket(kap, c, p, level, side, a, b, t, of_slope, iterations):
+    """Safeguarded Newton on g = side (f - level), f = h (or h' with of_slope), g(a) < 0 <= g(b).
+
+    Returns the last iterate and the bracket end with g >= 0.
+    """
+    for _ in range(iterations):
+        if of_slope:
+            _, f, df = eval3(kap, c, p, t)
+        else:
+            f, df = eval2(kap, c, p, t)
+        g = side * (f - level)
+        if g >= 0.0:
+            b = t
+        else:
+            a = t
+        if b - a <= 4.0 * _EPS * max(abs(b), 1e-300):
+            break
+        dg = side * df
+        tn = t - g / dg if dg != 0.0 else 0.5 * (a + b)
+        if not (a < tn < b):
+            tn = 0.5 * (a + b)
+        if tn == t:
+            break
+        t = tn
+    return t, b
+
+
+@njit(cache=True)
+def refine(kap, c, p, level, side, a, b, ha, hb):
+    """Time of the crossing of `level` in [a, b], h monotone there, h(a) = ha and h(b) = hb.
+
+    g = side (h - level) has g(a) < 0 <= g(b).  Newton starts where the chord meets the level.
+    Returns the bracket end with g >= 0, so the state is at (never before) the crossing.
+    """
+    t = a + (b - a) * (level - ha) / (hb - ha) if hb != ha else 0.5 * (a + b)
+    if not a < t < b:
+        t = 0.5 * (a + b)
+    return _newton_in_bracket(kap, c, p, level, side, a, b, t, False, 200)[1]
+
+
+@njit(cache=True)
+def _escape_guess(h1, h2, h3, delta):
+    te = np.inf
+    if h1 != 0.0:
+        te = min(te, delta / abs(h1))
+    if h2 != 0.0:
+        te = min(te, math.sqrt(2.0 * delta / abs(h2)))
+    if h3 != 0.0:
+        te = min(te, (6.0 * delta / abs(h3)) ** (1.0 / 3.0))
+    if not te < np.inf:
+        te = HMIN
+    return max(0.25 * te, HMIN)
+
+
+@njit(cache=True)
+def _leave_boundary(kap, kpow, c, p, lo, hi, tau_max, escape, delta, out):
+    """Leave the band edge `escape` starts on; returns the clear time, or -1 with out filled.
+
+    For the first tiny steps h(tau) - h(0) is round-off, so separation is
+    proven by the Taylor expansion at 0 with its remainder; once steps are
+    long enough, by direct evaluation.
+    """
+    edge = hi if escape > 0 else lo
+    h1 = deriv_at0(kap, c, p, 1)
+    h2 = deriv_at0(kap, c, p, 2)
+    h3 = deriv_at0(kap, c, p, 3)
+    m4 = bound_tab(kpow, c, p, 4, tau_max)
+    te = _escape_guess(h1, h2, h3, delta)
+    last_clear = 0.0
+    steps = 0.0
+    while True:
+        if te >= tau_max:
+            out[0] = np.inf
+            out[1] = 0.0
+            out[3] = steps
+            return -1.0
+        steps += 1.0
+        pred = escape * (h1 * te + 0.5 * h2 * te * te + h3 * te * te * te / 6.0)
+        if -(pred + m4 * te ** 4 / 24.0) >= delta:
+            break
+        if te > 1e3 * HMIN:
+            hb, dhb = eval2(kap, c, p, te)
+            clearance = escape * (edge - hb)
+            if clearance >= delta:
+                break
+            if clearance > 0.0:
+                last_clear = te
+            elif escape * dhb > 0.0:
+                # back at the edge before separating by delta: a grazing contact
+                if last_clear > 0.0:
+                    hl, _ = eval2(kap, c, p, last_clear)
+                    te = refine(kap, c, p, edge, escape, last_clear, te, hl, hb)
+                out[0] = te
+                out[1] = escape
+                out[2] += 1.0
+                out[3] = steps
+                return -1.0
+        te *= 2.0
+    out[3] = steps
+    return te
+
+
+@njit(cache=True, inline='always')
+def _one_sign(d0, d1, m3, w):
+    """+1 / -1 when h' is certified positive / negative on an interval of width w with end slopes d0, d1."""
+    spread = m3 * w * w / 8.0
+    if min(d0, d1) - spread > 0.0:
+        return 1
+    if max(d0, d1) + spread < 0.0:
+        return -1
+    return 0
+
+
+@njit(cache=True, inline='always')
+def _hermite_inside(h0, d0, h1, d1, w, m4, lo, hi):
+    """h certified inside (lo, hi) on [0, w]: the cubic Hermite interpolant's extremes, widened by its error
+    bound m4 w^4 / 384 and by the round-off of forming it."""
+    slope = (h1 - h0) / w
+    c2 = (3.0 * slope - 2.0 * d0 - d1) / w
+    c3 = (d0 + d1 - 2.0 * slope) / (w * w)
+    top = max(h0, h1)
+    bot = min(h0, h1)
+    # interior extrema where H' = d0 + 2 c2 s + 3 c3 s^2 vanishes
+    qa = 3.0 * c3
+    qb = 2.0 * c2
+    s1 = -1.0
+    s2 = -1.0
+    if qa != 0.0:
+        disc = qb * qb - 4.0 * qa * d0
+        if disc >= 0.0:
+            root = math.sqrt(disc)
+            s1 = (-qb - root) / (2.0 * qa)
+            s2 = (-qb + root) / (2.0 * qa)
+    elif qb != 0.0:
+        s1 = -d0 / qb
+    for s in (s1, s2):
+        if 0.0 < s < w:
+            v = h0 + s * (d0 + s * (c2 + s * c3))
+            top = max(top, v)
+            bot = min(bot, v)
+    err = m4 * w * w * w * w / 384.0 + 16.0 * _EPS * (abs(h0) + abs(h1) + w * (abs(d0) + abs(d1)))
+    return top + err < hi and bot - err > lo
+
+
+@njit(cache=True, inline='always')
+def _step_guess(margin, dh, h, lo, hi, m2, m3, m4):
+    """A first step: the longest of the spans each certificate can be expected to accept, but no farther
+    than a little past where the slope would take h to the wall it heads for (there the step finds the
+    crossing with h monotone, ready to refine)."""
+    step = math.sqrt(4.0 * margin / m2) if m2 > 0.0 else np.inf
+    if m3 > 0.0:
+        step = max(step, 0.5 * math.sqrt(8.0 * abs(dh) / m3))
+    if m4 > 0.0:
+        step = max(step, math.sqrt(math.sqrt(192.0 * margin / m4)))
+    if dh > 0.0 and hi < np.inf:
+        step = min(step, 1.2 * (hi - h) / dh)
+    elif dh < 0.0 and lo > -np.inf:
+        step = min(step, 1.2 * (h - lo) / -dh)
+    return max(step, HMIN)
+
+
+@njit(cache=True)
+def first_exit(kap, kpow, c, p, lo, hi, tau_max, escape, delta, out):
+    """First tau in (0, tau_max] where h leaves (lo, hi).
+
+    escape = +1/-1: h starts on hi/lo and is leaving it (after an impact or a
+    release); re-contact closer than the contact tolerance `delta` is not
+    resolved.  kpow: |kap|^n, n = 0..4 (segment.kappa_powers).  Writes out[0] = tau (inf if none),
+    out[1] = side (+1 hi, -1 lo, 0 none), out[2] = grazing passes, out[3] = steps taken.
+    """
+    out[2] = 0.0
+    out[3] = 0.0
+    a = 0.0
+    if escape != 0:
+        a = _leave_boundary(kap, kpow, c, p, lo, hi, tau_max, escape, delta, out)
+        if a < 0.0:
+            return
+    m2 = bound_tab(kpow, c, p, 2, tau_max)
+    m3 = bound_tab(kpow, c, p, 3, tau_max)
+    m4 = bound_tab(kpow, c, p, 4, tau_max)
+    steps = out[3]
+    grazing = 0.0
+    ha, dha = eval2(kap, c, p, a)
+    near = False
+    while a < tau_max:
+        margin = max(min(hi - ha, ha - lo), 0.0)
+        hstep = _step_guess(margin, dha, ha, lo, hi, m2, m3, m4)
+        while True:
+            b = min(a + hstep, tau_max)
+            w = b - a
+            hb, dhb = eval2(kap, c, p, b)
+            steps += 1.0
+            sign = _one_sign(dha, dhb, m3, w)
+            if hb >= hi or hb <= lo:
+                side = 1.0 if hb >= hi else -1.0
+                monotone = side * dha - m2 * w > 0.0 or side * dhb - m2 * w > 0.0 or sign == side
+                if monotone or w <= HMIN:
+                    level = hi if side > 0 else lo
+                    out[0] = refine(kap, c, p, level, side, a, b, ha, hb)
+                    out[1] = side
+                    out[2] = grazing + (0.0 if monotone else 1.0)
+                    out[3] = steps
+                    return
+                hstep = 0.5 * w
+                continue
+            spread = m2 * w * w / 8.0
+            if max(ha, hb) + spread < hi and min(ha, hb) - spread > lo:
+                break
+            if sign != 0 and lo <= ha <= hi:
+                break  # h monotone between two values inside the band
+            if _hermite_inside(ha, dha, hb, dhb, w, m4, lo, hi):
+                break
+            if w <= HMIN:
+                break  # a tangency within round-off of the edge
+            hstep = 0.5 * w
+        close = min(hi - hb, hb - lo) < delta
+        if close and not near:
+            grazing += 1.0
+        near = close
+        a = b
+        ha = hb
+        dha = dhb
+    out[0] = np.inf
+    out[1] = 0.0
+    out[2] = grazing
+    out[3] = steps
+
+
+@njit(cache=True)
+def _zero_of_derivative(kap, c, p, a, b, da):
+    """A zero of h' in (a, b) where h' changes sign (h'(a) = da): safeguarded Newton on h'."""
+    side = -1.0 if da > 0.0 else 1.0  # g = side h' < 0 at a
+    return _newton_in_bracket(kap, c, p, 0.0, side, a, b, 0.5 * (a + b), True, 100)[0]
+
+
+@njit(cache=True)
+def _ends(kap, ek, c, p, big_t):
+    """h(0), h'(0), h(T), h'(T) from ek = exp(kap T): no exponentials to evaluate."""
+    h0 = p[0]
+    d0 = p[1]
+    h1 = p[0] + big_t * (p[1] + big_t * (p[2] + big_t * p[3]))
+    d1 = p[1] + big_t * (2.0 * p[2] + 3.0 * big_t * p[3])
+    for k in range(kap.shape[0]):
+        ck = c[k]
+        if ck.real != 0.0 or ck.imag != 0.0:
+            ckk = ck * kap[k]
+            h0 += ck.real
+            d0 += ckk.real
+            h1 += (ck * ek[k]).real
+            d1 += (ckk * ek[k]).real
+    return h0, d0, h1, d1
+
+
+@njit(cache=True, inline='always')
+def _probe(kap, c, p, t, peak, at):
+    """h at t, kept as the running peak if larger: returns (peak, where, h'(t))."""
+    h, dh = eval2(kap, c, p, t)
+    if abs(h) > peak:
+        return abs(h), t, dh
+    return peak, at, dh
+
+
+@njit(cache=True, inline='always')
+def _push(stack, top, a, b, da, db):
+    """An interval [a, b] with its end slopes onto the search's stack; returns the new top."""
+    stack[top, 0] = a
+    stack[top, 1] = b
+    stack[top, 2] = da
+    stack[top, 3] = db
+    return top + 1
+
+
+@njit(cache=True)
+def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
+    """max(peak, max |h| over [0, T]), certified to PEAK_RTOL.
+
+    Branch and bound: an interval whose bound cannot beat the running peak is
+    dropped.  Where h' changes sign, its zero is refined and h evaluated
+    there; around it h'' keeps its sign over a radius |h''| / M3, so h has no
+    other extremum there and only the rest needs searching.  An interval where
+    h' provably keeps its sign is monotone: its ends hold its extremes.
+    kpow: kappa_powers of kap; ek = exp(kap T); stack: (n, 4) work array.  Returns the new peak and the time where it is
+    attained (-1 if the old peak stands, -2 if the search gave up).
+    """
+    h0, d0, h1, d1 = _ends(kap, ek, c, p, big_t)
+    at = -1.0
+    if abs(h0) > peak:
+        peak = abs(h0)
+        at = 0.0
+    if abs(h1) > peak:
+        peak = abs(h1)
+        at = big_t
+    m2 = bound_tab(kpow, c, p, 2, big_t)
+    if max(abs(h0), abs(h1)) + m2 * big_t * big_t / 8.0 <= peak * (1.0 + PEAK_RTOL):
+        return peak, at
+    m3 = bound_tab(kpow, c, p, 3, big_t)
+    top = _push(stack, 0, 0.0, big_t, d0, d1)
+    hmin = max(big_t, 1.0) * 1e-13
+    visits = 0
+    while top > 0:
+        visits += 1
+        if visits > PEAK_MAX_VISITS:
+            return peak, -2.0 if at < 0.0 else at  # the caller flags an uncertified peak
+        top -= 1
+        a = stack[top, 0]
+        b = stack[top, 1]
+        da = stack[top, 2]
+        db = stack[top, 3]
+        ha, _ = eval2(kap, c, p, a)
+        hb, _ = eval2(kap, c, p, b)
+        w = b - a
+        if max(abs(ha), abs(hb)) + m2 * w * w / 8.0 <= peak * (1.0 + PEAK_RTOL) or w <= hmin:
+            continue
+        if (da > 0.0) == (db > 0.0) and min(abs(da), abs(db)) - m3 * w * w / 8.0 > 0.0:
+            continue  # monotone: the ends were counted
+        if top + 2 >= stack.shape[0]:
+            continue  # depth is bounded by log2(T / hmin); never overflow
+        if (da > 0.0) != (db > 0.0) and da != 0.0 and db != 0.0:
+            tz = _zero_of_derivative(kap, c, p, a, b, da)
+            hz, _, ddz = eval3(kap, c, p, tz)
+            if abs(hz) > peak:
+                peak = abs(hz)
+                at = tz
+            rho = abs(ddz) / m3 if m3 > 0.0 else np.inf
+            left = max(a, tz - rho)
+            right = min(b, tz + rho)
+            if left > a:
+                peak, at, dl = _probe(kap, c, p, left, peak, at)
+                top = _push(stack, top, a, left, da, dl)
+            if right < b:
+                peak, at, dr = _probe(kap, c, p, right, peak, at)
+                top = _push(stack, top, right, b, dr, db)
+            continue
+        mid = 0.5 * (a + b)
+        peak, at, dmid = _probe(kap, c, p, mid, peak, at)
+        top = _push(stack, top, a, mid, da, dmid)
+        top = _push(stack, top, mid, b, dmid, db)
+    return peak, at

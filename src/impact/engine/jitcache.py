@@ -1,0 +1,72 @@
+"""Keep numba's on-disk cache honest across modules.
+
+numba checks only the source file of the function it loads from its cache,
+but a kernel carries compiled copies of the functions it calls from other
+modules: after an edit of segment.py alone, run_scene (scene_loop.py) or the
+paper loop (paper_loop.py, which shares the contact search of events.py) would
+load stale code.  A stamp of the engine's sources, kept beside each cache,
+catches that and drops the cached kernels of that folder once.
+
+:func:`compile_lock` serialises compiling and loading across processes.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import functools
+import hashlib
+import os
+from pathlib import Path
+
+CORE = Path(__file__).parent
+
+
+@functools.cache  # three modules purge at import; the sources are read once per process
+def sources_digest() -> str:
+    digest = hashlib.sha256()
+    for src in sorted(CORE.glob("*.py")):
+        digest.update(src.name.encode() + src.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def purge_stale_cache(dispatcher, name: str) -> None:
+    """Drop the cached kernels beside `dispatcher`'s cache when the core's sources changed."""
+    folder = Path(dispatcher._cache._cache_path)
+    stamp = folder / f"{name}-{sources_digest()}.stamp"
+    try:
+        if stamp.exists():
+            return
+        folder.mkdir(parents=True, exist_ok=True)
+        with open(folder / f"{name}.lock", "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            if not stamp.exists():
+                for old in folder.iterdir():
+                    if old.suffix in (".nbi", ".nbc") or (old.suffix == ".stamp" and old.name.startswith(name)):
+                        old.unlink(missing_ok=True)
+                stamp.touch()
+            fcntl.flock(lock, fcntl.LOCK_UN)
+    except OSError:
+        pass  # a read-only cache: numba compiles in memory instead
+
+
+def _cache_dir() -> Path:
+    return Path(os.environ.get("NUMBA_CACHE_DIR") or CORE / "__pycache__")
+
+
+@contextlib.contextmanager
+def compile_lock():
+    """Exclusive lock on the numba cache folder while kernels compile or load.
+
+    Processes starting together (parallel Snakemake or SLURM jobs) never write
+    the on-disk cache at the same time: the first compiles and stores, the
+    others wait and then load.
+    """
+    folder = _cache_dir()
+    folder.mkdir(parents=True, exist_ok=True)
+    with open(folder / "impact-jit.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)

@@ -1,0 +1,286 @@
+"""Modal shortcuts of a segment: per-configuration tables that make the hot steps O(modes).
+
+build_segment writes every row of a configuration as C[i, k] = V[r(i), k] w_k,
+where V holds the configuration's eigenvectors, w the segment's modal
+amplitudes and r(i) the reduced degree of freedom that carries full degree of
+freedom i (a unit at rest on its wall rides its floor; a free CID unit has no
+exponential part).  Any fixed linear combination of the rows therefore has
+exponential coefficients (a^T V)_k w_k, and any fixed quadratic form of the
+velocities integrates to a double sum over modes.  Those coefficients depend
+on the configuration only, so they are tabulated once per cache slot:
+
+    gvis[k, l] = kap_k kap_l V_k^T C_r V_l   the viscous dissipation, v^T C v
+    lmod[k]    = kap_k l_r^T V_k              the load's work, f(t) l^T v
+    mvec[m, k] = (a_m^T V)_k (kap_k^2 for an acceleration monitor)
+    mbnd[m, k] = |mvec[m, k]| |kap_k|^2       the monitor's curvature bound per |w_k|
+
+A record run then integrates its energy terms and bounds every monitor with
+a few multiply-adds per mode instead of assembling rows of every degree of
+freedom.  The harmonic load's two extra slots are added where it is present.
+
+Every row is real, so its terms come in conjugate pairs: Re sum_k c_k e^(kap_k t)
+equals Re sum_k wt_k c_k e^(kap_k t) with weight 2 on one mode of each pair, 0
+on its partner and 1 on a real mode or a pair near critical damping (mode_weights).  Whatever is linear in a
+row (its values, derivatives, bounds) is therefore computed on the weighted
+half row, with half the exponentials; a product of two rows is not linear,
+so its double sum keeps every l and halves only the outer sum over k.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from impact.engine.layout import D_STUCKTIME, D_VISC, D_WORK, MODE_FREE, MODE_LOCKED, MON_ACCEL, NPOLY
+from impact.engine.segment import poly_bound, poly_integral
+
+
+@njit(cache=True)
+def modal_tables(slots, nmax, nmon):
+    """Empty per-slot tables for modal_slot (nmax: the largest reduced size; mkey -1: not filled)."""
+    m2 = 2 * nmax
+    return (np.full(slots, -1, dtype=np.int64), np.zeros((slots, m2, m2), dtype=np.complex128),
+            np.zeros((slots, m2), dtype=np.complex128), np.zeros((slots, nmon, m2), dtype=np.complex128),
+            np.zeros((slots, nmon, m2)))
+
+
+_PAIR_TOL = 1e-9  # two modes are a conjugate pair when they are conjugates to this fraction of |kap|
+# below this |Im kap| / |kap| (damping ratio above 0.995) a pair is summed in full: near critical damping
+# its two coefficients are large and cancel, and the half row would lose that cancellation
+_PAIR_MIN = 0.1
+
+
+@njit(cache=True)
+def mode_weights(kap, wt):
+    """Weight 2 on the upper mode of each conjugate pair and 0 on its partner, found by value; 1 elsewhere.
+
+    Pairs are matched explicitly, never guessed from the sign of Im kap alone: the eigenvalues come from a
+    complex eigensolver, so a real mode may carry a rounding error in its imaginary part, and it keeps
+    weight 1 whatever the sign of that error.  Repeated pairs (identical units) match one to one.
+    """
+    n = kap.shape[0]
+    for k in range(n):
+        wt[k] = 1.0
+    for k in range(n):
+        a = kap[k]
+        if not a.imag > _PAIR_MIN * abs(a):
+            continue
+        partner = -1
+        closest = _PAIR_TOL * abs(a)
+        for j in range(n):
+            if j != k and wt[j] == 1.0 and kap[j].imag < 0.0:
+                gap = abs(kap[j] - a.conjugate())
+                if gap <= closest:
+                    partner = j
+                    closest = gap
+        if partner >= 0:
+            wt[k] = 2.0
+            wt[partner] = 0.0
+
+
+@njit(cache=True, inline='always')
+def halve(c, wt):
+    """The weighted half row of c, in place."""
+    for k in range(c.shape[0]):
+        c[k] = c[k] * wt[k]
+
+
+@njit(cache=True)
+def _reduced_index(s, fidx, nf, units, mode, red):
+    """red[i]: the reduced degree of freedom that carries full degree of freedom i (-1: a free CID unit)."""
+    ufloor = units[1]
+    for i in range(red.shape[0]):
+        red[i] = -1
+    for r in range(fidx.shape[1]):
+        i = fidx[s, r]
+        if i >= 0:
+            red[i] = r
+    for j in range(ufloor.shape[0]):
+        if mode[j] != MODE_FREE:
+            red[nf + j] = red[ufloor[j]]
+
+
+@njit(cache=True)
+def modal_slot(s, key, cache, nf, units, mode, mon_rows, mon_kind, mtab):
+    """Fill slot s of the modal tables for configuration `key` (a no-op when they are current)."""
+    mkey, gvis, lmod, mvec, mbnd = mtab
+    if mkey[s] == key:
+        return
+    nr, lam, vec, cred, fidx, ellr = cache[1], cache[2], cache[3], cache[6], cache[7], cache[8]
+    n = nr[s]
+    red = np.empty(mon_rows.shape[1], dtype=np.int64)
+    _reduced_index(s, fidx, nf, units, mode, red)
+    cv = np.zeros((n, 2 * n), dtype=np.complex128)  # C_r V
+    for a in range(n):
+        for l in range(2 * n):
+            acc = 0.0 + 0.0j
+            for b in range(n):
+                acc += cred[s, a, b] * vec[s, b, l]
+            cv[a, l] = acc
+    for k in range(2 * n):
+        lk = 0.0 + 0.0j
+        for r in range(n):
+            lk += ellr[s, r] * vec[s, r, k]
+        lmod[s, k] = lam[s, k] * lk
+        for l in range(2 * n):
+            acc = 0.0 + 0.0j
+            for a in range(n):
+                acc += vec[s, a, k] * cv[a, l]
+            gvis[s, k, l] = lam[s, k] * lam[s, l] * acc
+    for m in range(mon_rows.shape[0]):
+        for k in range(2 * n):
+            acc = 0.0 + 0.0j
+            for i in range(mon_rows.shape[1]):
+                wt = mon_rows[m, i]
+                if wt != 0.0 and red[i] >= 0:
+                    acc += wt * vec[s, red[i], k]
+            if mon_kind[m] == MON_ACCEL:
+                acc *= lam[s, k] * lam[s, k]
+            mvec[s, m, k] = acc
+            mbnd[s, m, k] = abs(acc) * abs(lam[s, k]) ** 2
+    mkey[s] = key
+
+
+@njit(cache=True, inline='always')
+def amplitude_moduli(n, wc, aw):
+    """|w_k| of the segment's 2n modal amplitudes (wc[2n:4n], build_segment's scratch)."""
+    for k in range(2 * n):
+        aw[k] = abs(wc[2 * n + k])
+
+
+@njit(cache=True, inline='always')
+def monitor_row(s, m, n, wc, C, mon_rows, mon_kind, mon_rec, kap, P, r0, r1, harmonic, mtab, cm, pm):
+    """Coefficient row of monitor m from the modal amplitudes wc[2n:4n] (the harmonic slots from C)."""
+    mvec = mtab[3]
+    nt = kap.shape[0]
+    for k in range(nt):
+        cm[k] = 0.0
+    for k in range(2 * n):
+        cm[k] = mvec[s, m, k] * wc[2 * n + k]
+    for k in range(NPOLY):
+        pm[k] = 0.0
+    for i in range(P.shape[0]):
+        wt = mon_rows[m, i]
+        if wt != 0.0:
+            for k in range(NPOLY):
+                pm[k] += wt * P[i, k]
+            if harmonic:
+                for k in range(nt - 2, nt):
+                    cm[k] += wt * C[i, k]
+    if mon_kind[m] == MON_ACCEL:
+        if harmonic:
+            for k in range(nt - 2, nt):
+                cm[k] = cm[k] * kap[k] * kap[k]
+        pm[0] = 2.0 * pm[2] + mon_rec[m] * r0
+        pm[1] = 6.0 * pm[3] + mon_rec[m] * r1
+        pm[2] = 0.0
+        pm[3] = 0.0
+
+
+@njit(cache=True, inline='always')
+def end_values(ek, c, p, big_t):
+    """h(0) and h(T) of a row, from ek = exp(kap T)."""
+    h0 = p[0]
+    h1 = p[0] + big_t * (p[1] + big_t * (p[2] + big_t * p[3]))
+    for k in range(c.shape[0]):
+        ck = c[k]
+        h0 += ck.real
+        h1 += ck.real * ek[k].real - ck.imag * ek[k].imag
+    return h0, h1
+
+
+@njit(cache=True, inline='always')
+def curvature_bound(s, m, n, aw, wt, cm, pm, kpow, big_t, harmonic, mtab):
+    """Bound on |h''| over [0, T] of monitor m's (halved) row: the tabulated modal part, then the rest."""
+    mbnd = mtab[4]
+    acc = 0.0
+    for k in range(2 * n):
+        acc += wt[k] * mbnd[s, m, k] * aw[k]
+    if harmonic:
+        nt = cm.shape[0]
+        for k in range(nt - 2, nt):
+            acc += abs(cm[k]) * kpow[2, k]
+    return acc + poly_bound(pm, 2, big_t)
+
+
+@njit(cache=True, inline='always')
+def square_integral(c, p, wt, pair, single, big_t):
+    """Integral over [0, T] of h^2 for a full (not halved) row h, the outer sums halved by the weights."""
+    quad = 0.0 + 0.0j
+    cross = 0.0 + 0.0j
+    for k in range(c.shape[0]):
+        if wt[k] == 0.0 or (c[k].real == 0.0 and c[k].imag == 0.0):
+            continue
+        inner = 0.0 + 0.0j
+        for l in range(c.shape[0]):
+            inner += pair[k, l] * c[l]
+        poly = 0.0 + 0.0j
+        for m in range(NPOLY):
+            poly += p[m] * single[k, m]
+        quad += wt[k] * c[k] * inner
+        cross += wt[k] * c[k] * poly
+    return quad.real + 2.0 * cross.real + poly_integral(p, p, big_t)
+
+
+@njit(cache=True, inline='always')
+def integrate_modal(s, n, work, cu1, wt, tau, units, mode, load_vec, record, r0, r1, P, pair, single, mtab, cache,
+                    pu, diag):
+    """Exact work of a record load, viscous dissipation and stuck time over [0, tau], from the modal tables.
+
+    work: build_segment's scratch, with the modal amplitudes w in work[1][2n:4n] and the particular
+    solution's (constant) reduced velocities u1 in work[0][2n:3n]; cu1: scratch of the reduced size;
+    wt: the segment's mode weights (mode_weights), which halve the sums over k;
+    pair, single: integral_tables over tau; pu: (2, NPOLY) scratch.
+    """
+    gvis, lmod = mtab[1], mtab[2]
+    lam, vec, cred = cache[2], cache[3], cache[6]
+    wf, wc = work
+    W = 2 * n
+    U1 = 2 * n
+    if tau > 0.0:
+        if record is not None:
+            # work: f = r0 + r1 tau against l^T v, the modal part, then the polynomial parts of every row
+            acc = 0.0 + 0.0j
+            for k in range(2 * n):
+                if wt[k] != 0.0:
+                    acc += wt[k] * lmod[s, k] * wc[W + k] * (r0 * single[k, 0] + r1 * single[k, 1])
+            for k in range(NPOLY):
+                pu[0, k] = 0.0
+                pu[1, k] = 0.0
+            pu[1, 0] = r0
+            pu[1, 1] = r1
+            for i in range(P.shape[0]):
+                li = load_vec[i]
+                if li != 0.0:
+                    pu[0, 0] += li * P[i, 1]
+                    pu[0, 1] += li * 2.0 * P[i, 2]
+                    pu[0, 2] += li * 3.0 * P[i, 3]
+            diag[D_WORK] += acc.real + poly_integral(pu[0], pu[1], tau)
+        # viscous dissipation of v_r = V diag(kap) w exp(kap tau) + u1 in the reduced damping C_r
+        quad = 0.0 + 0.0j
+        for k in range(2 * n):
+            if wt[k] == 0.0:
+                continue
+            inner = 0.0 + 0.0j
+            for l in range(2 * n):
+                inner += gvis[s, k, l] * pair[k, l] * wc[W + l]
+            quad += wt[k] * wc[W + k] * inner
+        steady = 0.0
+        for a in range(n):
+            ca = 0.0
+            for b in range(n):
+                ca += cred[s, a, b] * wf[U1 + b]
+            cu1[a] = ca
+            steady += wf[U1 + a] * ca
+        cross = 0.0 + 0.0j
+        for k in range(2 * n):
+            if wt[k] == 0.0:
+                continue
+            hk = 0.0 + 0.0j
+            for a in range(n):
+                hk += vec[s, a, k] * cu1[a]
+            cross += wt[k] * wc[W + k] * lam[s, k] * hk * single[k, 0]
+        diag[D_VISC] += quad.real + 2.0 * cross.real + steady * tau
+    for j in range(mode.shape[0]):
+        if mode[j] != MODE_FREE and mode[j] != MODE_LOCKED:
+            diag[D_STUCKTIME] += tau

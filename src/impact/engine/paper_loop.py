@@ -1,0 +1,663 @@
+"""Exact event-driven kernels (numba).
+
+Between events every model of the study is linear with harmonic forcing, so the
+motion on a segment is known in closed form.  We keep it in *coefficient form*
+
+    x(tau) = Re sum_k cx[k] exp(kap[k] tau)
+    y(tau) = Re sum_k cy[k] exp(kap[k] tau) + py1 tau + py2 tau^2
+
+with tau the time since the segment started.  Slots 0..3 hold the homogeneous
+modes (eigenvalues of the segment's linear system), 4 and 5 the harmonic
+particular solution (exp(+-i r tau)), 6 the constant part (kap = 0).  The
+polynomial in y is the free mass's ballistic flight (CID), which the
+eigen-decomposition cannot express (a Jordan block at 0).
+
+Every event (impact, release from a wall) is the first exit of a scalar
+function of this form from a band.  :func:`first_exit` finds it with a
+certificate: on [a, b] a function with |h''| <= M2 stays within
+max(h(a), h(b)) + M2 (b-a)^2 / 8, and M2 is bounded from the coefficients
+(all homogeneous modes decay, so |exp(kap tau)| <= 1).  A step is accepted
+only when that bound keeps it inside the band, so an impact cannot be missed,
+however briefly the trajectory touches the wall.  A crossing is refined by
+safeguarded Newton once monotonicity is certified (|h'| > M2 (b-a)).
+
+Integrals over a segment (work of the force, viscous dissipation, the square
+of x for the amplitude window) are products of exponentials and are
+integrated exactly.
+
+The PID's eigen-data arrive as a tuple, the CID's as None: numba prunes the
+branch that does not apply, so a CID run never compiles the pendulum path.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from impact.engine.contact import slide_decision
+from impact.engine.events import first_exit
+from impact.engine.jitcache import purge_stale_cache
+from impact.engine.segment import kappa_powers
+
+NT = 7  # coefficient slots, see module docstring
+
+MODE_FREE = 0
+MODE_STUCK = 1    # resting against a wall (side = +-1)
+MODE_LOCKED = 2   # d = 0: damper and structure are one body
+MODE_FLOOR = 3    # friction only: stuck to the floor away from the walls
+
+# parameter vector layout (float64 array)
+P_MU, P_BETA, P_E, P_D, P_WP, P_F, P_R, P_PHI = 0, 1, 2, 3, 4, 5, 6, 7
+P_VSTICK, P_TEND, P_TWIN, P_MAXEV, P_T0 = 8, 9, 10, 11, 12
+NPAR = 13
+
+# diagnostics vector layout
+D_IMPACTS, D_IMPACTS_WIN, D_STICKS, D_GRAZE, D_PEN = 0, 1, 2, 3, 4
+D_WORK, D_VISC, D_IMPLOSS, D_E0, D_E1, D_X2WIN = 5, 6, 7, 8, 9, 10
+D_CAP, D_NREC, D_STEPS, D_STUCKTIME, D_TEND = 11, 12, 13, 14, 15
+D_FRICTION, D_EMAX = 16, 17  # D_EMAX: the largest stored energy at a segment's end
+NDIAG = 18
+
+# record columns: t, side, x, v-, w-, v+, w+, stuck_after
+NREC = 8
+
+
+
+# ----------------------------------------------------------------------------
+# evaluation of coefficient-form functions
+# ----------------------------------------------------------------------------
+
+@njit(cache=True)
+def _deriv_at0(kap, c, n):
+    """n-th derivative at tau = 0 of the exponential part."""
+    acc = 0.0
+    for k in range(NT):
+        z = c[k]
+        for _ in range(n):
+            z = z * kap[k]
+        acc += z.real
+    return acc
+
+
+@njit(cache=True)
+def _bound(kap, c, n):
+    """Bound on |n-th derivative| of the exponential part for tau >= 0."""
+    acc = 0.0
+    for k in range(NT):
+        ck = c[k]
+        if ck.real != 0.0 or ck.imag != 0.0:
+            term = math.sqrt(ck.real * ck.real + ck.imag * ck.imag)
+            if n > 0:
+                kk = kap[k]
+                size = math.sqrt(kk.real * kk.real + kk.imag * kk.imag)
+                for _ in range(n):
+                    term *= size
+            acc += term
+    return acc
+
+
+@njit(cache=True)
+def flight_state(kap, cx, cy, py1, py2, tau, z):
+    """Write (x, x', y, y') at tau into z (the sampler reads a free flight with it)."""
+    _state_from(kap, np.exp(kap * tau), cx, cy, py1, py2, tau, z)
+
+
+@njit(cache=True)
+def _state_from(kap, eh, cx, cy, py1, py2, tau, z):
+    """_state with eh = exp(kap tau) given: the segment's own exponentials."""
+    x = 0.0
+    v = 0.0
+    y = 0.0
+    w = 0.0
+    for k in range(NT):
+        ek = eh[k]
+        a = cx[k] * ek
+        b = cy[k] * ek
+        x += a.real
+        v += (a * kap[k]).real
+        y += b.real
+        w += (b * kap[k]).real
+    z[0] = x
+    z[1] = v
+    z[2] = y + py1 * tau + py2 * tau * tau
+    z[3] = w + py1 + 2.0 * py2 * tau
+
+
+# ----------------------------------------------------------------------------
+# segment construction
+# ----------------------------------------------------------------------------
+
+@njit(cache=True)
+def _oscillator(kap, cx, x0, v0, w2, two_zeta_w, amp, r, theta0, const):
+    """x'' + two_zeta_w x' + w2 x = amp sin(theta0 + r tau) + const, from (x0, v0)."""
+    sigma = -0.5 * two_zeta_w
+    root = np.sqrt(complex(w2 - 0.25 * two_zeta_w * two_zeta_w, 0.0))
+    lp = sigma + 1j * root
+    lm = sigma - 1j * root
+    zp = amp / complex(w2 - r * r, two_zeta_w * r)
+    ch = zp * np.exp(1j * theta0) / 2j
+    kap[4] = 1j * r
+    kap[5] = -1j * r
+    kap[6] = 0.0
+    cx[4] = ch
+    cx[5] = ch.conjugate()
+    cx[6] = const / w2
+    xp0 = 2.0 * ch.real + const / w2
+    vp0 = 2.0 * (ch * 1j * r).real
+    h0 = x0 - xp0
+    h1 = v0 - vp0
+    cp = (h1 - lm * h0) / (lp - lm)
+    kap[0] = lp
+    kap[1] = lm
+    kap[2] = 0.0
+    kap[3] = 0.0
+    cx[0] = cp
+    cx[1] = h0 - cp
+    cx[2] = 0.0
+    cx[3] = 0.0
+
+
+@njit(cache=True)
+def build_free_flight(kap, cx, cy, poly, z0, t0, p, pid, fric, sigma):
+    """Free flight of the damper mass from state z0 at absolute time t0.
+
+    With friction (CID), the mass slides in direction sigma = sign(s') and a
+    constant force mu a_f sigma acts on the structure, -a_f sigma on the mass.
+    """
+    theta0 = p[P_R] * t0 + p[P_PHI]
+    if pid is None:
+        if fric is None:
+            _oscillator(kap, cx, z0[0], z0[1], 1.0, 2.0 * p[P_BETA], p[P_F], p[P_R], theta0, 0.0)
+            poly[1] = 0.0
+        else:
+            a_f = fric[0] * sigma
+            _oscillator(kap, cx, z0[0], z0[1], 1.0, 2.0 * p[P_BETA], p[P_F], p[P_R], theta0, p[P_MU] * a_f)
+            poly[1] = -0.5 * a_f
+        for k in range(NT):
+            cy[k] = 0.0
+        cy[6] = z0[2]
+        poly[0] = z0[3]
+    else:
+        lam, vec, vinv, zc = pid
+        ph = np.exp(1j * theta0)
+        rel = np.empty(4, dtype=np.complex128)
+        for i in range(4):
+            rel[i] = z0[i] - (zc[i] * ph).imag
+        for k in range(4):
+            wk = 0.0 + 0.0j
+            for i in range(4):
+                wk += vinv[k, i] * rel[i]
+            kap[k] = lam[k]
+            cx[k] = vec[0, k] * wk
+            cy[k] = vec[2, k] * wk
+        kap[4] = 1j * p[P_R]
+        kap[5] = -1j * p[P_R]
+        kap[6] = 0.0
+        cx[4] = zc[0] * ph / 2j
+        cx[5] = cx[4].conjugate()
+        cy[4] = zc[2] * ph / 2j
+        cy[5] = cy[4].conjugate()
+        cx[6] = 0.0
+        cy[6] = 0.0
+        poly[0] = 0.0
+        poly[1] = 0.0
+
+
+@njit(cache=True)
+def _build_combined(kap, cx, cy, poly, z0, t0, p, offset):
+    """Damper mass moving with the structure (stuck at a wall or locked, d = 0).
+
+    The pendulum spring is internal to the combined body, so CID and PID share
+    (1 + mu) x'' + 2 beta x' + x = F0 sin(.); y = x + offset.
+    """
+    mu = p[P_MU]
+    theta0 = p[P_R] * t0 + p[P_PHI]
+    _oscillator(kap, cx, z0[0], z0[1], 1.0 / (1.0 + mu), 2.0 * p[P_BETA] / (1.0 + mu),
+                p[P_F] / (1.0 + mu), p[P_R], theta0, 0.0)
+    for k in range(NT):
+        cy[k] = cx[k]
+    cy[6] = cx[6] + offset
+    poly[0] = 0.0
+    poly[1] = 0.0
+
+
+# ----------------------------------------------------------------------------
+# event location
+# ----------------------------------------------------------------------------
+
+# ----------------------------------------------------------------------------
+# exact integrals over a segment
+# ----------------------------------------------------------------------------
+
+@njit(cache=True)
+def _halve(kap, c):
+    """Fold each mode of an exactly conjugate pair of kap into its first slot: Re(c_j e^{kap_j t}) +
+    Re(c_j+1 e^{conj(kap_j) t}) = Re((c_j + conj(c_j+1)) e^{kap_j t}), so a search on the row evaluates half
+    the exponentials.  (A pair that is not exactly conjugate is left as it is.)"""
+    for j in range(NT - 1):
+        if kap[j].imag != 0.0 and kap[j + 1] == kap[j].conjugate() and (c[j + 1].real != 0.0
+                                                                        or c[j + 1].imag != 0.0):
+            c[j] += c[j + 1].conjugate()
+            c[j + 1] = 0.0
+
+
+@njit(cache=True)
+def _int_prod0(kap, eh, ca, cb, h):
+    """_int_prod over [0, h] with eh = exp(kap h): the segment's own exponentials, none evaluated here."""
+    acc = 0.0
+    j = 0
+    while j < NT:
+        # a mode and its conjugate (next slot, conjugate coefficient) give conjugate sums: Re of one, twice
+        paired = j + 1 < NT and kap[j + 1] == kap[j].conjugate() and ca[j + 1] == ca[j].conjugate() \
+            and kap[j].imag != 0.0
+        if ca[j].real != 0.0 or ca[j].imag != 0.0:
+            row = 0.0 + 0.0j
+            for l in range(NT):
+                if cb[l].real == 0.0 and cb[l].imag == 0.0:
+                    continue
+                kk = kap[j] + kap[l]
+                zz = kk * h
+                if zz.real * zz.real + zz.imag * zz.imag < 1e-6:  # |zz| < 1e-3
+                    phi1 = h * (1.0 + zz * (0.5 + zz * (1.0 / 6.0 + zz * (1.0 / 24.0 + zz / 120.0))))
+                else:
+                    phi1 = (eh[j] * eh[l] - 1.0) / kk
+                row += cb[l] * phi1
+            acc += (2.0 if paired else 1.0) * (ca[j] * row).real
+        j += 2 if paired else 1
+    return acc
+
+
+@njit(cache=True)
+def _int_prod(kap, ca, cb, a, b):
+    """Re of the integral over [a, b] of (sum ca e^{kap t})(sum cb e^{kap t})."""
+    if b <= a:
+        return 0.0
+    h = b - a
+    ea = np.empty(NT, dtype=np.complex128)
+    for k in range(NT):
+        ea[k] = np.exp(kap[k] * a)
+    acc = 0.0 + 0.0j
+    for j in range(NT):
+        if ca[j].real == 0.0 and ca[j].imag == 0.0:
+            continue
+        for l in range(NT):
+            if cb[l].real == 0.0 and cb[l].imag == 0.0:
+                continue
+            kk = kap[j] + kap[l]
+            zz = kk * h
+            if abs(zz) < 1e-3:
+                phi1 = h * (1.0 + zz * (0.5 + zz * (1.0 / 6.0 + zz * (1.0 / 24.0 + zz / 120.0))))
+            else:
+                phi1 = (np.exp(zz) - 1.0) / kk
+            acc += ca[j] * cb[l] * ea[j] * ea[l] * phi1
+    return acc.real
+
+
+@njit(cache=True)
+def _energy(z, p):
+    mu = p[P_MU]
+    wp = p[P_WP]
+    s = z[2] - z[0]
+    return 0.5 * (z[1] * z[1] + z[0] * z[0] + mu * z[3] * z[3] + mu * wp * wp * s * s)
+
+
+# ----------------------------------------------------------------------------
+# contact resolution
+# ----------------------------------------------------------------------------
+
+@njit(cache=True)
+def _stays_stuck(kap, cx, p, side, a_f):
+    """Whether the wall on `side` keeps holding the damper mass.
+
+    The contact force on the damper is N = mu (x'' + wp^2 side d/2) and the
+    wall on `side` can only push inwards; friction (CID) can add up to mu a_f
+    either way: the mass stays while q = side*x'' + wp^2 d/2 - a_f <= 0.
+    Decided on the first derivative of q at 0 that is clearly non-zero.
+    """
+    base = p[P_WP] ** 2 * 0.5 * p[P_D] - a_f
+    for n in range(2, 6):
+        qn = side * _deriv_at0(kap, cx, n) + (base if n == 2 else 0.0)
+        scale = _bound(kap, cx, n) + (abs(base) if n == 2 else 0.0)
+        if abs(qn) > 1e-10 * scale:
+            return qn < 0.0
+    return True
+
+
+@njit(cache=True)
+def _apply_impact(z, side, p, diag):
+    """Newton impact (Eq. 3), then stick if the rebound is below threshold.
+
+    Returns True when the relative velocity was reset to zero (sticking
+    candidate).  Momentum is conserved to round-off; losses are booked.
+    """
+    mu = p[P_MU]
+    e = p[P_E]
+    vm = z[1]
+    wm = z[3]
+    srel = wm - vm
+    z[1] = ((1.0 - mu * e) * vm + mu * (1.0 + e) * wm) / (1.0 + mu)
+    z[3] = ((1.0 + e) * vm + (mu - e) * wm) / (1.0 + mu)
+    red = 0.5 * mu / (1.0 + mu)
+    diag[D_IMPLOSS] += red * (1.0 - e * e) * srel * srel
+    z[2] = z[0] + side * 0.5 * p[P_D]
+    if abs(z[3] - z[1]) < p[P_VSTICK]:
+        _stick(z, p, diag)
+        return True
+    return False
+
+
+@njit(cache=True)
+def _stick(z, p, diag):
+    """Perfectly plastic end of a rebound: common velocity, momentum kept, loss booked."""
+    mu = p[P_MU]
+    after = z[3] - z[1]
+    vc = (z[1] + mu * z[3]) / (1.0 + mu)
+    diag[D_IMPLOSS] += 0.5 * mu / (1.0 + mu) * after * after
+    z[1] = vc
+    z[3] = vc
+
+
+@njit(cache=True)
+def _floor_decision(kap, cx, a_f):
+    """slide_decision for the paper's damper: the combined body's x'' against a_f (the friction force that
+    drags the mass along is m x'')."""
+    q = np.empty(4)
+    scale = np.empty(4)
+    for n in range(4):
+        q[n] = _deriv_at0(kap, cx, n + 2)
+        scale[n] = _bound(kap, cx, n + 2)
+    return slide_decision(q, scale, a_f, 1e-10)
+
+
+@njit(cache=True)
+def _poly4(pp, p1, p2):
+    pp[0] = 0.0
+    pp[1] = p1
+    pp[2] = p2
+    pp[3] = 0.0
+
+
+def contact_code(mode, side, sigma):
+    """One integer for a contact state (mode, side, sigma): what a run starts from and ends in."""
+    return mode + 10 * (side + 1) + 100 * (sigma + 1)
+
+
+# the kernels' copy; Python calls contact_code, so importing a module that only names a state loads no
+# compiled code (a cached load costs about 0.1 s, and plots and the workflow's start-up need none)
+encode_contact = njit(cache=True)(contact_code)
+
+
+# ----------------------------------------------------------------------------
+# the run
+# ----------------------------------------------------------------------------
+
+@njit(cache=True)
+def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
+    """One run from absolute time p[P_T0] to p[P_TEND].
+
+    z_init: (x, x', y, y'); code_init: initial contact state (encode_contact).
+    pid: PID eigen-data or None (CID); fric: (a_f,) or None (frictionless):
+    None prunes that path at compile time.  rec: (n, NREC) impact records
+    (n may be 0).  diag: NDIAG diagnostics (zeroed here).  z_out: final state.
+    Returns the final contact code, for continuation runs.
+    """
+    for i in range(NDIAG):
+        diag[i] = 0.0
+    kap = np.zeros(NT, dtype=np.complex128)
+    cx = np.zeros(NT, dtype=np.complex128)
+    cy = np.zeros(NT, dtype=np.complex128)
+    cs = np.zeros(NT, dtype=np.complex128)
+    cv = np.zeros(NT, dtype=np.complex128)
+    cq = np.zeros(NT, dtype=np.complex128)
+    cf = np.zeros(NT, dtype=np.complex128)
+    eh = np.zeros(NT, dtype=np.complex128)  # exp(kap tau) of the segment
+    kpow = np.zeros((5, NT))
+    kap_powered = np.full(NT, np.nan + 0j)
+    poly = np.zeros(2)
+    pp = np.zeros(4)  # (0, p1, p2, 0): the polynomial part as the shared search takes it
+    ev = np.zeros(4)
+    ev2 = np.zeros(4)
+    z = z_init.copy()
+    d = p[P_D]
+    half = 0.5 * d
+    t = p[P_T0]
+    t_end = p[P_TEND]
+    t_win = p[P_TWIN]
+    period = 2.0 * math.pi
+    max_ev = p[P_MAXEV]
+    a_f = 0.0
+    if fric is not None:
+        a_f = fric[0]
+    sigma = code_init // 100 - 1
+    side = (code_init % 100) // 10 - 1
+    mode = code_init % 10
+    if d == 0.0:
+        mode = MODE_LOCKED
+    escape = 0
+    escape_v = 0
+    if mode == MODE_FREE and side != 0 and abs(z[2] - z[0]) >= half * (1.0 - 1e-12) and d > 0.0:
+        # a state just after an impact on wall `side` (e.g. a closed-form orbit)
+        escape = side
+    if fric is not None:
+        if mode == MODE_FREE and z[3] == z[1]:
+            mode = MODE_FLOOR
+        elif mode == MODE_FREE and sigma == 0:
+            sigma = 1 if z[3] > z[1] else -1
+    diag[D_E0] = _energy(z, p)
+    diag[D_EMAX] = diag[D_E0]
+    count_period = 0.0
+    period_index = math.floor(t / period)
+    nrec = rec.shape[0]
+    irec = 0
+    while t < t_end:
+        tau_max = t_end - t
+        if mode == MODE_FREE:
+            build_free_flight(kap, cx, cy, poly, z, t, p, pid, fric, sigma)
+        elif mode == MODE_FLOOR:
+            _build_combined(kap, cx, cy, poly, z, t, p, z[2] - z[0])
+            if fric is not None:
+                slide = _floor_decision(kap, cx, a_f)
+                if slide != 0:
+                    mode = MODE_FREE
+                    sigma = slide
+                    escape_v = -1
+                    continue
+        else:
+            _build_combined(kap, cx, cy, poly, z, t, p, side * half if mode == MODE_STUCK else 0.0)
+            if mode == MODE_STUCK and not _stays_stuck(kap, cx, p, side, a_f):
+                mode = MODE_FREE
+                escape = side
+                if fric is not None:
+                    sigma = -side
+                    escape_v = -1
+                continue
+        for k in range(NT):
+            cv[k] = cx[k] * kap[k]
+            if kap[k] != kap_powered[k]:  # a new contact mode: its |kap|^n for the search's bounds
+                kappa_powers(kap, kpow)
+                kap_powered[:] = kap
+        # locate the next event: ev_kind 1 impact/release/floor exit, 2 sliding stops
+        ev_kind = 1
+        if mode == MODE_FREE:
+            for k in range(NT):
+                cs[k] = cy[k] - cx[k]
+            _halve(kap, cs)
+            delta = 1e-12 * (_bound(kap, cs, 0) + d)
+            _poly4(pp, poly[0], poly[1])
+            first_exit(kap, kpow, cs, pp, -half, half, tau_max, escape, delta, ev)
+            if fric is not None:
+                # sigma * s' > 0 while sliding; the slide ends where it reaches 0
+                for k in range(NT):
+                    cq[k] = sigma * cs[k] * kap[k]
+                cq[6] += sigma * poly[0]
+                dv = 1e-12 * (_bound(kap, cq, 0) + 2.0 * abs(poly[1]))
+                _poly4(pp, 2.0 * sigma * poly[1], 0.0)
+                first_exit(kap, kpow, cq, pp, 0.0, np.inf, min(ev[0], tau_max), escape_v, dv, ev2)
+                diag[D_STEPS] += ev2[3]
+                if ev2[0] < ev[0]:
+                    ev[0] = ev2[0]
+                    ev[1] = 0.0
+                    ev_kind = 2
+        elif mode == MODE_STUCK:
+            for k in range(NT):
+                cq[k] = side * cx[k] * kap[k] * kap[k]
+            _halve(kap, cq)
+            level = -p[P_WP] ** 2 * half + a_f
+            delta = 1e-12 * (_bound(kap, cq, 0) + abs(level))
+            # just stuck with the contact force at round-off from its limit: the
+            # force is known to move away from it (see _stays_stuck)
+            q0 = _deriv_at0(kap, cq, 0)
+            esc = 1 if level - q0 < delta else 0
+            _poly4(pp, 0.0, 0.0)
+            first_exit(kap, kpow, cq, pp, -np.inf, level, tau_max, esc, delta, ev)
+        elif mode == MODE_FLOOR:
+            for k in range(NT):
+                cq[k] = cx[k] * kap[k] * kap[k]
+            _halve(kap, cq)
+            delta = 1e-12 * (_bound(kap, cq, 0) + a_f)
+            q0 = _deriv_at0(kap, cq, 0)
+            esc = 0
+            if a_f - abs(q0) < delta:
+                esc = 1 if q0 > 0.0 else -1
+            _poly4(pp, 0.0, 0.0)
+            first_exit(kap, kpow, cq, pp, -a_f, a_f, tau_max, esc, delta, ev)
+        else:
+            ev[0] = np.inf
+            ev[1] = 0.0
+            ev[2] = 0.0
+            ev[3] = 0.0
+        tau = min(ev[0], tau_max)
+        diag[D_GRAZE] += ev[2]
+        diag[D_STEPS] += ev[3]
+        # exact integrals over the segment
+        theta0 = p[P_R] * t + p[P_PHI]
+        cf[4] = p[P_F] * np.exp(1j * theta0) / 2j
+        cf[5] = cf[4].conjugate()
+        for k in range(NT):
+            if k > 0 and kap[k] == kap[k - 1].conjugate():
+                eh[k] = eh[k - 1].conjugate()  # exp(conj(z)) = conj(exp(z)): one exponential per pair
+            else:
+                eh[k] = np.exp(kap[k] * tau)
+        diag[D_WORK] += _int_prod0(kap, eh, cf, cv, tau)
+        diag[D_VISC] += 2.0 * p[P_BETA] * _int_prod0(kap, eh, cv, cv, tau)
+        if t + tau > t_win:
+            if t >= t_win:
+                diag[D_X2WIN] += _int_prod0(kap, eh, cx, cx, tau)
+            else:
+                diag[D_X2WIN] += _int_prod(kap, cx, cx, t_win - t, tau)
+        if mode != MODE_FREE:
+            diag[D_STUCKTIME] += tau
+        s_start = z[2] - z[0]
+        _state_from(kap, eh, cx, cy, poly[0], poly[1], tau, z)
+        e_now = _energy(z, p)
+        if e_now > diag[D_EMAX]:
+            diag[D_EMAX] = e_now
+        if fric is not None:
+            if mode == MODE_FREE:
+                # s' keeps its sign on a sliding segment: the work is exact
+                diag[D_FRICTION] += p[P_MU] * a_f * sigma * (z[2] - z[0] - s_start)
+        t = t + tau
+        escape = 0
+        escape_v = 0
+        if ev[0] > tau_max:
+            break
+        # period bookkeeping for the event cap
+        pi_now = math.floor(t / period)
+        if pi_now != period_index:
+            period_index = pi_now
+            count_period = 0.0
+        count_period += 1.0
+        if count_period > max_ev:
+            diag[D_CAP] = 1.0
+            break
+        ev_side = int(ev[1])
+        if fric is not None:
+            if ev_kind == 2:
+                # the slide ends: the floor holds the mass or it slides back
+                z[3] = z[1]
+                mode = MODE_FLOOR
+                continue
+            if mode == MODE_FLOOR:
+                # the floor can no longer drag the mass along: it slides
+                z[3] = z[1]
+                mode = MODE_FREE
+                sigma = -ev_side
+                escape_v = -1
+                continue
+        if mode == MODE_STUCK:
+            # release: the wall stops holding the mass, which leaves with s' = 0
+            mode = MODE_FREE
+            z[2] = z[0] + side * half
+            z[3] = z[1]
+            escape = side
+            if fric is not None:
+                sigma = -side
+                escape_v = -1
+            continue
+        # impact on wall ev_side
+        s_now = z[2] - z[0]
+        pen = abs(s_now) - half
+        if pen > diag[D_PEN]:
+            diag[D_PEN] = pen
+        approach = ev_side * (z[3] - z[1])
+        vm = z[1]
+        wm = z[3]
+        if approach <= 0.0:
+            # touched within contact tolerance while already separating
+            z[2] = z[0] + ev_side * half
+            escape = ev_side
+            continue
+        diag[D_IMPACTS] += 1.0
+        if t >= t_win:
+            diag[D_IMPACTS_WIN] += 1.0
+        stuck = _apply_impact(z, ev_side, p, diag)
+        side = ev_side
+        if fric is not None:
+            sigma = -side
+        if not stuck:
+            # a rebound whose excursion v^2 / (2 a) cannot clear the contact
+            # tolerance is unresolvable: the mass stays at the wall
+            build_free_flight(kap, cx, cy, poly, z, t, p, pid, fric, sigma)
+            for k in range(NT):
+                cs[k] = cy[k] - cx[k]
+            push = side * (_deriv_at0(kap, cs, 2) + 2.0 * poly[1])
+            rebound = z[3] - z[1]
+            tol = 1e-12 * (_bound(kap, cs, 0) + d)
+            if push > 0.0 and rebound * rebound < 2.0 * tol * push:
+                _stick(z, p, diag)
+                stuck = True
+        if stuck:
+            # decide whether the wall holds the mass
+            _build_combined(kap, cx, cy, poly, z, t, p, side * half)
+            if _stays_stuck(kap, cx, p, side, a_f):
+                mode = MODE_STUCK
+                diag[D_STICKS] += 1.0
+            else:
+                mode = MODE_FREE
+                escape = side
+                if fric is not None:
+                    escape_v = -1
+        else:
+            mode = MODE_FREE
+            escape = side
+        if irec < nrec:
+            rec[irec, 0] = t
+            rec[irec, 1] = side
+            rec[irec, 2] = z[0]
+            rec[irec, 3] = vm
+            rec[irec, 4] = wm
+            rec[irec, 5] = z[1]
+            rec[irec, 6] = z[3]
+            rec[irec, 7] = 1.0 if mode == MODE_STUCK else 0.0
+            irec += 1
+    diag[D_E1] = _energy(z, p)
+    diag[D_NREC] = irec
+    diag[D_TEND] = t
+    for i in range(4):
+        z_out[i] = z[i]
+    return encode_contact(mode, side, sigma)
+
+
+purge_stale_cache(run, "impact-kernels")

@@ -1,0 +1,946 @@
+"""The loop of a scene run, as a sequence of named steps.
+
+Each pass builds the segment of the current configuration, searches every
+unit's next event (certified), integrates the energy terms and the monitors
+exactly over the segment, moves the state to the segment's end and resolves
+the events found there (all units whose event falls at that instant).
+
+Optional parts arrive as None and numba prunes them at compile time:
+`springs` (PID and TMD units), `fric` (Coulomb friction under CID units),
+`harm` (a harmonic load) and `record` (a piecewise-linear load record).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from impact.engine.contact import floor_decision, floor_mass, floor_row, solve_impulses, stays, stuck_row
+from impact.engine.events import PEAK_RTOL, first_exit, peak_abs
+from impact.engine.jitcache import purge_stale_cache
+from impact.engine.layout import (
+    D_CAP,
+    D_E0,
+    D_E1,
+    D_EMAX,
+    D_FRICTION,
+    D_GRAZE,
+    D_IMPACTS,
+    D_IMPACTS_WIN,
+    D_IMPLOSS,
+    D_NREC,
+    D_PEAK_GAVE_UP,
+    D_PEN,
+    D_SEGMENTS,
+    D_SIMULTANEOUS,
+    D_STEPS,
+    D_STICKS,
+    D_STUCKTIME,
+    D_TEND,
+    D_VISC,
+    D_WORK,
+    KIND_PID,
+    KIND_TMD,
+    MODE_FLOOR,
+    MODE_FREE,
+    MODE_LOCKED,
+    MODE_STUCK,
+    NDIAG,
+    NPOLY,
+    P_MAXEV,
+    P_OMEGA,
+    P_PERIOD,
+    P_PHI,
+    P_REC_DT,
+    P_REC_T0,
+    P_T0,
+    P_TEND,
+    P_TWIN,
+    P_VSTICK,
+    R_IMPULSE,
+    R_SIDE,
+    R_STUCK,
+    R_T,
+    R_UNIT,
+    R_V0,
+    R_V1,
+    R_W0,
+    R_W1,
+)
+from impact.engine.modal import (
+    amplitude_moduli,
+    curvature_bound,
+    end_values,
+    halve,
+    integrate_modal,
+    modal_slot,
+    modal_tables,
+    mode_weights,
+    monitor_row,
+    square_integral,
+)
+from impact.engine.sampler import sample_segment
+from impact.engine.segment import (
+    bound,
+    bound_tab,
+    build_segment,
+    config_key,
+    config_slot,
+    deriv_at0,
+    derivative_row,
+    energy,
+    int_prod,
+    integral_tables,
+    kappa_powers,
+    same_unit,
+    state_from_exp,
+)
+
+EV_NONE, EV_WALL, EV_SLIDE_STOP, EV_RELEASE, EV_FLOOR_EXIT = 0, 1, 2, 3, 4
+_TOL = 1e-12  # contact tolerance, relative to the size of the gap function
+
+
+@njit(cache=True, inline='always')
+def record_value(record, p, t):
+    """(r0, r1, t_next): the record's value and slope at t, and its next sample time."""
+    t0 = p[P_REC_T0]
+    dt = p[P_REC_DT]
+    n = record.shape[0]
+    x = (t - t0) / dt
+    i = int(math.floor(x))
+    if i < 0:
+        return 0.0, 0.0, t0
+    if i >= n - 1:
+        return 0.0, 0.0, np.inf
+    t_i = t0 + i * dt
+    t_next = t0 + (i + 1) * dt
+    if t_next <= t:  # t sits on a sample within round-off
+        i += 1
+        if i >= n - 1:
+            return 0.0, 0.0, np.inf
+        t_i = t_next
+        t_next = t0 + (i + 1) * dt
+    slope = (record[i + 1] - record[i]) / dt
+    if t == t_i:
+        return record[i], slope, t_next
+    return record[i] + slope * (t - t_i), slope, t_next
+
+
+@njit(cache=True, inline='always')
+def _gap_row(C, P, nf, j, f, cs, ps):
+    for k in range(C.shape[1]):
+        cs[k] = C[nf + j, k] - C[f, k]
+    for k in range(NPOLY):
+        ps[k] = P[nf + j, k] - P[f, k]
+
+
+@njit(cache=True)
+def _unit_level(j, units, springs, fric):
+    """wp^2 d/2 - a_f: what the contact force must overcome to release a unit at its wall."""
+    level = 0.0
+    if springs is not None:
+        if units[0][j] == KIND_PID:
+            level += springs[0][j] / units[2][j] * 0.5 * units[4][j]
+    if fric is not None:
+        level -= fric[j]
+    return level
+
+
+@njit(cache=True, inline='always')
+def _same_unit_state(j, nf, units, springs, mode, side, sigma, escape, escape_v, C, P):
+    i = j - 1
+    if not same_unit(units, springs, i, j):
+        return False
+    if mode[i] != mode[j] or side[i] != side[j] or sigma[i] != sigma[j] or escape[i] != escape[j] \
+            or escape_v[i] != escape_v[j]:
+        return False
+    for k in range(P.shape[1]):
+        if P[nf + i, k] != P[nf + j, k]:
+            return False
+    for k in range(C.shape[1]):
+        if C[nf + i, k] != C[nf + j, k]:
+            return False
+    return True
+
+
+@njit(cache=True, inline='always')
+def _clear_of_walls(kpow, ek, c, p, lo, hi, big_t, delta):
+    """Certified: h stays inside (lo, hi) over [0, T] and ends farther than delta from both walls.
+
+    The first step of first_exit over the whole segment, with h(T) from ek = exp(kap T): most sample
+    steps of a record are settled by it without evaluating an exponential.
+    """
+    h0 = p[0]
+    h1 = p[0] + big_t * (p[1] + big_t * (p[2] + big_t * p[3]))
+    for k in range(c.shape[0]):
+        ck = c[k]
+        if ck.real != 0.0 or ck.imag != 0.0:
+            h0 += ck.real
+            h1 += (ck * ek[k]).real
+    spread = bound_tab(kpow, c, p, 2, big_t) * big_t * big_t / 8.0
+    return (max(h0, h1) + spread < hi and min(h0, h1) - spread > lo
+            and hi - h1 >= delta and h1 - lo >= delta)
+
+
+SIDE_FOUND, SIDE_KEPT = 2, 3  # _earliest: the wall from the search, or the unit's entry untouched
+
+
+@njit(cache=True, inline='always')
+def _earliest(out, best, ties, j, kind, side, ev_t, ev_side, ev_kind):
+    """Unit j's event found by a search (out) becomes its event if it comes first (or ties, with ties);
+    returns the earliest time so far.  side: the event's wall (SIDE_FOUND: the one the search crossed,
+    SIDE_KEPT: the unit's entry left as it is)."""
+    if out[0] < best or (ties and out[0] == best):
+        ev_t[j] = out[0]
+        if side == SIDE_FOUND:
+            ev_side[j] = int(out[1])
+        elif side != SIDE_KEPT:
+            ev_side[j] = side
+        ev_kind[j] = kind
+        return out[0]
+    return best
+
+
+@njit(cache=True, inline='always')
+def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape, escape_v, tau_max,
+                  r0, r1, ev_t, ev_side, ev_kind, cs, ps, cq, pq, out, kpow, ek, ek_tau, wt, diag):
+    """Next event of every unit; returns the earliest time (inf if none up to tau_max).
+
+    ek = exp(kap ek_tau): when ek_tau is tau_max, a unit far from its walls is cleared without a search.
+    The searched rows are weighted half rows (modal.halve): half the exponentials per evaluation.
+    """
+    ukind, ufloor, um, uload, ud = units[0], units[1], units[2], units[3], units[4]
+    best = tau_max
+    for j in range(um.shape[0]):
+        ev_t[j] = np.inf
+        ev_kind[j] = EV_NONE
+        if ukind[j] == KIND_TMD or mode[j] == MODE_LOCKED:
+            continue
+        f = ufloor[j]
+        half = 0.5 * ud[j]
+        if j > 0 and _same_unit_state(j, nf, units, springs, mode, side, sigma, escape, escape_v, C, P):
+            # identical to the unit before (a multi-unit damper moving as one): the same event, bit for bit
+            ev_t[j] = ev_t[j - 1]
+            ev_side[j] = ev_side[j - 1]
+            ev_kind[j] = ev_kind[j - 1]
+            continue
+        out[2] = 0.0
+        out[3] = 0.0
+        if mode[j] == MODE_FREE:
+            _gap_row(C, P, nf, j, f, cs, ps)
+            halve(cs, wt)
+            delta = _TOL * (bound_tab(kpow, cs, ps, 0, 0.0) + ud[j])
+            if escape[j] == 0 and best == ek_tau and _clear_of_walls(kpow, ek, cs, ps, -half, half, best, delta):
+                out[0] = np.inf
+                out[1] = 0.0
+                out[3] = 1.0
+            else:
+                first_exit(kap, kpow, cs, ps, -half, half, best, escape[j], delta, out)
+            diag[D_GRAZE] += out[2]
+            diag[D_STEPS] += out[3]
+            best = _earliest(out, best, True, j, EV_WALL, SIDE_FOUND, ev_t, ev_side, ev_kind)
+            if fric is not None:
+                if fric[j] > 0.0:
+                    # sigma s' > 0 while sliding; the slide ends where it reaches 0
+                    derivative_row(kap, cs, ps, cq, pq)
+                    for k in range(kap.shape[0]):
+                        cq[k] = sigma[j] * cq[k]
+                    for k in range(NPOLY):
+                        pq[k] = sigma[j] * pq[k]
+                    dv = _TOL * bound_tab(kpow, cq, pq, 0, 0.0)
+                    first_exit(kap, kpow, cq, pq, 0.0, np.inf, best, escape_v[j], dv, out)
+                    diag[D_STEPS] += out[3]
+                    best = _earliest(out, best, False, j, EV_SLIDE_STOP, 0, ev_t, ev_side, ev_kind)
+        elif mode[j] == MODE_STUCK:
+            stuck_row(kap, C, P, f, side[j], uload[j] * r0, uload[j] * r1,
+                      _unit_level(j, units, springs, fric), cq, pq)
+            halve(cq, wt)
+            delta = _TOL * bound_tab(kpow, cq, pq, 0, 0.0)
+            q0 = deriv_at0(kap, cq, pq, 0)
+            esc = 1 if -q0 < delta else 0
+            first_exit(kap, kpow, cq, pq, -np.inf, 0.0, best, esc, delta, out)
+            diag[D_GRAZE] += out[2]
+            diag[D_STEPS] += out[3]
+            best = _earliest(out, best, True, j, EV_RELEASE, SIDE_KEPT, ev_t, ev_side, ev_kind)
+        elif mode[j] == MODE_FLOOR:
+            if fric is not None:
+                a_f = fric[j]
+                floor_row(kap, C, P, f, uload[j] * r0, uload[j] * r1, cq, pq)
+                halve(cq, wt)
+                delta = _TOL * (bound_tab(kpow, cq, pq, 0, 0.0) + a_f)
+                q0 = deriv_at0(kap, cq, pq, 0)
+                esc = 0
+                if a_f - abs(q0) < delta:
+                    esc = 1 if q0 > 0.0 else -1
+                first_exit(kap, kpow, cq, pq, -a_f, a_f, best, esc, delta, out)
+                diag[D_STEPS] += out[3]
+                best = _earliest(out, best, True, j, EV_FLOOR_EXIT, SIDE_FOUND, ev_t, ev_side, ev_kind)
+    found = np.inf
+    for j in range(um.shape[0]):
+        if ev_t[j] < found:
+            found = ev_t[j]
+    return found
+
+
+@njit(cache=True, inline='always')
+def integrate_segment(kap, C, P, tau, nf, building, units, springs, mode, load_vec, harm, record, theta0,
+                      r0, r1, pair, single, cv, pv, cu, pu, diag):
+    """Exact work of the load, viscous dissipation and stuck time over [0, tau] (tables: integral_tables)."""
+    nt = kap.shape[0]
+    nfull = C.shape[0]
+    cb = building[2]
+    # velocity rows of every degree of freedom
+    for i in range(nfull):
+        derivative_row(kap, C[i], P[i], cv[i], pv[i])
+    # work: the load f(tau) times sum_i load_vec_i v_i
+    for k in range(nt):
+        cu[0, k] = 0.0
+    for k in range(NPOLY):
+        pu[0, k] = 0.0
+    for i in range(nfull):
+        li = load_vec[i]
+        if li != 0.0:
+            for k in range(nt):
+                cu[0, k] += li * cv[i, k]
+            for k in range(NPOLY):
+                pu[0, k] += li * pv[i, k]
+    for k in range(nt):
+        cu[1, k] = 0.0
+    for k in range(NPOLY):
+        pu[1, k] = 0.0
+    if harm is not None:
+        cu[1, nt - 2] = np.exp(1j * theta0) / 2j
+        cu[1, nt - 1] = cu[1, nt - 2].conjugate()
+    if record is not None:
+        pu[1, 0] = r0
+        pu[1, 1] = r1
+    diag[D_WORK] += int_prod(tau, pair, single, cu[0], pu[0], cu[1], pu[1])
+    # viscous dissipation: the building's damping, then the units' dashpots
+    visc = 0.0
+    for a in range(nf):
+        for k in range(nt):
+            cu[0, k] = 0.0
+        for k in range(NPOLY):
+            pu[0, k] = 0.0
+        for b in range(nf):
+            cab = cb[a, b]
+            if cab != 0.0:
+                for k in range(nt):
+                    cu[0, k] += cab * cv[b, k]
+                for k in range(NPOLY):
+                    pu[0, k] += cab * pv[b, k]
+        visc += int_prod(tau, pair, single, cv[a], pv[a], cu[0], pu[0])
+    if springs is not None:
+        uc = springs[1]
+        ufloor = units[1]
+        for j in range(uc.shape[0]):
+            if uc[j] != 0.0 and mode[j] == MODE_FREE:
+                f = ufloor[j]
+                for k in range(nt):
+                    cu[0, k] = cv[nf + j, k] - cv[f, k]
+                for k in range(NPOLY):
+                    pu[0, k] = pv[nf + j, k] - pv[f, k]
+                visc += uc[j] * int_prod(tau, pair, single, cu[0], pu[0], cu[0], pu[0])
+    diag[D_VISC] += visc
+    for j in range(mode.shape[0]):
+        if mode[j] != MODE_FREE and mode[j] != MODE_LOCKED:
+            diag[D_STUCKTIME] += tau
+
+
+@njit(cache=True)
+def step_tables(s, key, tau, dt, kap, ek, pair, single, dtab):
+    """ek = exp(kap tau) and the integral tables over tau.
+
+    A record's whole sample step (tau == dt) recurs in every configuration
+    after each event: its tables are kept per cache slot and copied.
+    """
+    dkey, dek, dpair, dsingle = dtab
+    nt = kap.shape[0]
+    if tau != dt:
+        for k in range(nt):
+            ek[k] = np.exp(kap[k] * tau)
+        integral_tables(kap, ek, tau, pair, single)
+        return
+    if dkey[s] != key:
+        for k in range(nt):
+            dek[s, k] = np.exp(kap[k] * tau)
+        integral_tables(kap, dek[s], tau, dpair[s], dsingle[s])
+        dkey[s] = key
+    for k in range(nt):
+        ek[k] = dek[s, k]
+        for m in range(NPOLY):
+            single[k, m] = dsingle[s, k, m]
+        for l in range(nt):
+            pair[k, l] = dpair[s, k, l]
+
+
+@njit(cache=True)
+def _shift_row(kap, c, p, a, cs, ps):
+    """The row h(a + tau) as a row in tau."""
+    for k in range(kap.shape[0]):
+        cs[k] = c[k] * np.exp(kap[k] * a)
+    ps[0] = p[0] + a * (p[1] + a * (p[2] + a * p[3]))
+    ps[1] = p[1] + a * (2.0 * p[2] + 3.0 * a * p[3])
+    ps[2] = p[2] + 3.0 * a * p[3]
+    ps[3] = p[3]
+
+
+@njit(cache=True, inline='always')
+def monitor_modal(s, n, wc, aw, kap, kpow, ek, C, P, tau, t, t_win, monitors, r0, r1, harmonic, mtab, pair, single,
+                  cm, pm, cs, ps, stack, wt, mon_peak, mon_peak_t, mon_x2, diag):
+    """Certified peaks of every monitor over the segment, and the roof's square integrated over the window.
+
+    Rows and curvature bounds come from the modal tables: a segment whose ends
+    and bound cannot beat the running peak is settled without the search, as
+    peak_abs's own first test would settle it.  A monitor whose peak has
+    reached its cap (a stroke at its wall) is not searched again.
+    """
+    mon_rows, mon_kind, mon_rec, mon_cap = monitors
+    for m in range(mon_rows.shape[0]):
+        if m != 0 and mon_peak[m] >= mon_cap[m]:
+            continue
+        monitor_row(s, m, n, wc, C, mon_rows, mon_kind, mon_rec, kap, P, r0, r1, harmonic, mtab, cm, pm)
+        if m == 0 and t + tau > t_win:
+            window_square(kap, cm, pm, tau, t, t_win, pair, single, cs, ps, wt, mon_x2)
+        halve(cm, wt)
+        h0, h1 = end_values(ek, cm, pm, tau)
+        ends = max(abs(h0), abs(h1))
+        peak = mon_peak[m]
+        if ends > peak or ends + curvature_bound(s, m, n, aw, wt, cm, pm, kpow, tau, harmonic, mtab) * tau * tau / 8.0 \
+                > peak * (1.0 + PEAK_RTOL):
+            peak, at = peak_abs(kap, kpow, ek, cm, pm, tau, peak, stack)
+            if at == -2.0:
+                diag[D_PEAK_GAVE_UP] += 1.0
+            elif at >= 0.0:
+                mon_peak[m] = peak
+                mon_peak_t[m] = t + at
+
+
+@njit(cache=True, inline='always')
+def window_square(kap, cm, pm, tau, t, t_win, pair, single, cs, ps, wt, mon_x2):
+    """The first monitor's (the roof's) square integrated over the part of the segment inside the window."""
+    start = max(t_win - t, 0.0)
+    if start > 0.0:
+        # the one segment that the window's start cuts: tables of its own
+        _shift_row(kap, cm, pm, start, cs, ps)
+        rest = tau - start
+        ek_w = np.exp(kap * rest)
+        pair_w = np.empty_like(pair)
+        single_w = np.empty_like(single)
+        integral_tables(kap, ek_w, rest, pair_w, single_w)
+        mon_x2[0] += int_prod(rest, pair_w, single_w, cs, ps, cs, ps)
+    else:
+        mon_x2[0] += square_integral(cm, pm, wt, pair, single, tau)
+
+
+@njit(cache=True)
+def impacts_on_floor(f, nf, building, units, mode, side, q, v, hit, ev_side, impulse_out, diag):
+    """Resolve the simultaneous impacts on floor f (units with hit[j]); returns how many.
+
+    The contacts are the units hitting a wall of f and the units resting on
+    one; consecutive identical contacts form one group (see solve_impulses).
+    """
+    ufloor, um, ud, ue = units[1], units[2], units[4], units[5]
+    nu = um.shape[0]
+    group = np.full(nu, -1, dtype=np.int64)
+    u = np.empty(nu)
+    minv = np.empty(nu)
+    sd = np.empty(nu)
+    e = np.empty(nu)
+    count = np.zeros(nu)
+    n = 0
+    for j in range(nu):
+        if ufloor[j] != f or not (hit[j] or mode[j] == MODE_STUCK):
+            continue
+        sj = ev_side[j] if hit[j] else side[j]
+        uj = sj * (v[nf + j] - v[f]) if hit[j] else 0.0
+        ej = ue[j] if hit[j] else 0.0
+        mj = 1.0 / um[j]
+        if n > 0 and sd[n - 1] == sj and u[n - 1] == uj and e[n - 1] == ej and minv[n - 1] == mj:
+            count[n - 1] += 1.0
+        else:
+            sd[n] = sj
+            u[n] = uj
+            e[n] = ej
+            minv[n] = mj
+            count[n] = 1.0
+            n += 1
+        group[j] = n - 1
+    if n == 0:
+        return 0
+    imp = np.zeros(n)
+    mf = floor_mass(f, building, units, mode)
+    ke0 = 0.5 * mf * v[f] * v[f]
+    for j in range(nu):
+        if group[j] >= 0:
+            ke0 += 0.5 * um[j] * v[nf + j] * v[nf + j]
+    solve_impulses(u[:n], minv[:n], sd[:n], e[:n], count[:n], mf, imp)
+    dv = 0.0
+    for a in range(n):
+        dv += sd[a] * count[a] * imp[a]
+    v[f] += dv / mf
+    ke1 = 0.5 * mf * v[f] * v[f]
+    hits = 0
+    for j in range(nu):
+        g = group[j]
+        if g < 0:
+            continue
+        v[nf + j] -= sd[g] * imp[g] * minv[g]
+        if not hit[j] and imp[g] > 0.0:
+            # a resting unit that its wall keeps: it moves with its floor, exactly rather than to round-off
+            v[nf + j] = v[f]
+        ke1 += 0.5 * um[j] * v[nf + j] * v[nf + j]
+        impulse_out[j] = imp[g]
+        if hit[j]:
+            q[nf + j] = q[f] + sd[g] * 0.5 * ud[j]
+            hits += 1
+    for j in range(nu):
+        if ufloor[j] == f and mode[j] == MODE_LOCKED:
+            v[nf + j] = v[f]
+    diag[D_IMPLOSS] += ke0 - ke1
+    return hits
+
+
+@njit(cache=True)
+def plastic_merge(j, nf, building, units, mode, side, q, v, diag):
+    """End a rebound too slow to resolve: the unit and its floor take a common velocity."""
+    ufloor, um = units[1], units[2]
+    f = ufloor[j]
+    mf = floor_mass(f, building, units, mode)
+    for l in range(um.shape[0]):
+        if l != j and ufloor[l] == f and mode[l] == MODE_STUCK:
+            mf += um[l]
+    rel = v[nf + j] - v[f]
+    diag[D_IMPLOSS] += 0.5 * um[j] * mf / (um[j] + mf) * rel * rel
+    vc = (mf * v[f] + um[j] * v[nf + j]) / (mf + um[j])
+    v[f] = vc
+    v[nf + j] = vc
+    for l in range(um.shape[0]):
+        if ufloor[l] == f and (mode[l] == MODE_STUCK or mode[l] == MODE_LOCKED):
+            v[nf + l] = vc
+
+
+@njit(cache=True)
+def settle(t, p, nf, building, units, springs, fric, load_vec, harm, record, mode, side, sigma, offset, escape,
+           escape_v, check, q, v, cache, cursor, kap, C, P, cs, ps, cq, pq, work, diag):
+    """Decide, at one instant, which units the walls or the floor keep holding.
+
+    check[j]: 1 a unit that just rebounded (is its rebound resolvable?), 2 a
+    unit that just came to rest on a wall or on the floor (does it stay?).
+    Repeats until no unit changes, since every change alters the floors' motion.
+    """
+    ufloor, um, uload, ud = units[1], units[2], units[3], units[4]
+    nu = um.shape[0]
+    omega = p[P_OMEGA]
+    r0 = 0.0
+    r1 = 0.0
+    theta0 = 0.0
+    if record is not None:
+        r0, r1, _ = record_value(record, p, t)
+    if harm is not None:
+        theta0 = omega * t + p[P_PHI]
+    for _ in range(2 * nu + 2):
+        s = config_slot(building, units, springs, load_vec, omega if harm is not None else 0.0, mode, cache, cursor)
+        build_segment(s, cache, units, springs, fric, mode, offset, sigma, nf, q, v, r0, r1, harm is not None, theta0,
+                      omega, kap, C, P, work)
+        # every unit is judged on the same segment, so identical units decide alike
+        changed = False
+        for j in range(nu):
+            f = ufloor[j]
+            if check[j] == 1 and mode[j] == MODE_FREE:
+                check[j] = 0
+                _gap_row(C, P, nf, j, f, cs, ps)
+                push = side[j] * deriv_at0(kap, cs, ps, 2)
+                rebound = v[nf + j] - v[f]
+                tol = _TOL * (bound(kap, cs, ps, 0, 0.0) + ud[j])
+                if push > 0.0 and rebound * rebound < 2.0 * tol * push:
+                    # a rebound whose excursion v^2 / (2 a) cannot clear the contact tolerance
+                    plastic_merge(j, nf, building, units, mode, side, q, v, diag)
+                    mode[j] = MODE_STUCK
+                    offset[j] = side[j] * 0.5 * ud[j]
+                    check[j] = 2
+                    changed = True
+            elif check[j] == 2 and mode[j] == MODE_STUCK:
+                stuck_row(kap, C, P, f, side[j], uload[j] * r0, uload[j] * r1,
+                          _unit_level(j, units, springs, fric), cq, pq)
+                check[j] = 0
+                if stays(kap, cq, pq):
+                    diag[D_STICKS] += 1.0
+                else:
+                    mode[j] = MODE_FREE
+                    escape[j] = side[j]
+                    if fric is not None:
+                        sigma[j] = -side[j]
+                        escape_v[j] = -1
+                    changed = True
+            elif check[j] == 2 and mode[j] == MODE_FLOOR:
+                check[j] = 0
+                if fric is not None:
+                    floor_row(kap, C, P, f, uload[j] * r0, uload[j] * r1, cq, pq)
+                    slide = floor_decision(kap, cq, pq, fric[j])
+                    if slide != 0:
+                        mode[j] = MODE_FREE
+                        sigma[j] = slide
+                        escape_v[j] = -1
+                        changed = True
+        if not changed:
+            return
+
+
+@njit(cache=True)
+def _record_impacts(t, nf, units, mode, side, hit, ev_side, v_before, v, impulse, recs, irec):
+    ufloor = units[1]
+    for j in range(hit.shape[0]):
+        if hit[j] and irec < recs.shape[0]:
+            f = ufloor[j]
+            recs[irec, R_T] = t
+            recs[irec, R_UNIT] = j
+            recs[irec, R_SIDE] = ev_side[j]
+            recs[irec, R_V0] = v_before[f]
+            recs[irec, R_W0] = v_before[nf + j]
+            recs[irec, R_V1] = v[f]
+            recs[irec, R_W1] = v[nf + j]
+            recs[irec, R_STUCK] = 1.0 if mode[j] == MODE_STUCK else 0.0
+            recs[irec, R_IMPULSE] = impulse[j]
+            irec += 1
+    return irec
+
+
+@njit(cache=True)
+def resolve_events(t, tau_ev, nf, building, units, fric, mode, side, sigma, offset, escape, escape_v, check, q, v,
+                   ev_t, ev_side, ev_kind, vstick, hit, impulse, diag):
+    """Apply every unit's event that falls at this instant; returns the number of impacts."""
+    ufloor, um, ud = units[1], units[2], units[4]
+    nu = um.shape[0]
+    limit = tau_ev * (1.0 + 16.0 * 2.220446049250313e-16) + 1e-300
+    for j in range(nu):
+        hit[j] = False
+        impulse[j] = 0.0
+    for j in range(nu):
+        if not ev_t[j] <= limit:
+            continue
+        f = ufloor[j]
+        half = 0.5 * ud[j]
+        kind = ev_kind[j]
+        if kind == EV_RELEASE:
+            mode[j] = MODE_FREE
+            q[nf + j] = q[f] + side[j] * half
+            v[nf + j] = v[f]
+            escape[j] = side[j]
+            if fric is not None:
+                sigma[j] = -side[j]
+                escape_v[j] = -1
+        elif kind == EV_FLOOR_EXIT:
+            v[nf + j] = v[f]
+            mode[j] = MODE_FREE
+            sigma[j] = -ev_side[j]
+            escape_v[j] = -1
+        elif kind == EV_SLIDE_STOP:
+            v[nf + j] = v[f]
+            mode[j] = MODE_FLOOR
+            offset[j] = q[nf + j] - q[f]
+            check[j] = 2
+        elif kind == EV_WALL:
+            sd = ev_side[j]
+            pen = abs(q[nf + j] - q[f]) - half
+            if pen > diag[D_PEN]:
+                diag[D_PEN] = pen
+            if sd * (v[nf + j] - v[f]) <= 0.0:
+                # touched within contact tolerance while already separating
+                q[nf + j] = q[f] + sd * half
+                escape[j] = sd
+            else:
+                hit[j] = True
+    n_hit = 0
+    floors_done = np.zeros(building[0].shape[0], dtype=np.bool_)
+    for j in range(nu):
+        if hit[j] and not floors_done[ufloor[j]]:
+            floors_done[ufloor[j]] = True
+            n_hit += impacts_on_floor(ufloor[j], nf, building, units, mode, side, q, v, hit, ev_side, impulse, diag)
+    for j in range(nu):
+        f = ufloor[j]
+        if hit[j]:
+            side[j] = ev_side[j]
+            if fric is not None:
+                sigma[j] = -side[j]
+            if abs(v[nf + j] - v[f]) < vstick:
+                plastic_merge(j, nf, building, units, mode, side, q, v, diag)
+                mode[j] = MODE_STUCK
+                offset[j] = side[j] * 0.5 * ud[j]
+                check[j] = 2
+            else:
+                escape[j] = side[j]
+                check[j] = 1
+        elif mode[j] == MODE_STUCK and floors_done[f] and side[j] * (v[nf + j] - v[f]) < 0.0:
+            # its wall moved away under another unit's impact; a separation too slow to resolve
+            # is judged in settle like any slow rebound
+            mode[j] = MODE_FREE
+            escape[j] = side[j]
+            check[j] = 1
+            if fric is not None:
+                sigma[j] = -side[j]
+        elif mode[j] == MODE_FLOOR and floors_done[f] and v[nf + j] != v[f]:
+            # friction cannot pass on an impulse: the floor slips under the unit
+            mode[j] = MODE_FREE
+            sigma[j] = 1 if v[nf + j] > v[f] else -1
+            escape_v[j] = 0
+    return n_hit
+
+
+@njit(cache=True)
+def _workspace(nt, nfull, nu, nmax, slots, nmon):
+    """Every array a run works in, allocated once: (segment, scratch, events, tables)."""
+    seg = (np.zeros(nt, dtype=np.complex128), np.zeros((nfull, nt), dtype=np.complex128), np.zeros((nfull, NPOLY)),
+           np.zeros(nt, dtype=np.complex128), np.zeros((nt, nt), dtype=np.complex128),
+           np.zeros((nt, NPOLY), dtype=np.complex128), np.zeros((5, nt)))
+    rows = (np.zeros(nt, dtype=np.complex128), np.zeros(NPOLY), np.zeros(nt, dtype=np.complex128), np.zeros(NPOLY),
+            np.zeros(nt, dtype=np.complex128), np.zeros(NPOLY), np.zeros((nfull, nt), dtype=np.complex128),
+            np.zeros((nfull, NPOLY)), np.zeros((2, nt), dtype=np.complex128), np.zeros((2, NPOLY)))
+    vecs = (np.zeros((256, 4)), np.zeros(4), np.zeros(nfull), np.zeros(nfull), np.zeros(nfull), np.zeros(nmax),
+            np.zeros(2 * nmax), np.zeros(nu), np.ones(nt))
+    events = (np.zeros(nu), np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.bool_),
+              np.zeros(nu))
+    dtab = (np.full(slots, -1, dtype=np.int64), np.zeros((slots, nt), dtype=np.complex128),
+            np.zeros((slots, nt, nt), dtype=np.complex128), np.zeros((slots, nt, NPOLY), dtype=np.complex128))
+    tables = (modal_tables(slots, nmax, nmon), dtab, (np.zeros(7 * nmax), np.zeros(4 * nmax, dtype=np.complex128)),
+              np.zeros(1, dtype=np.int64))
+    return seg, rows, vecs, events, tables
+
+
+@njit(cache=True)
+def _initial_units(nf, units, fric, q, v, ustate):
+    """Contact state of every unit at the start: walls to check, friction's floor contact and slide sign."""
+    mode, side, sigma, offset, escape, escape_v, check = ustate
+    ufloor, ud = units[1], units[4]
+    for j in range(mode.shape[0]):
+        s_j = q[nf + j] - q[ufloor[j]]
+        offset[j] = s_j
+        if mode[j] != MODE_FREE:
+            check[j] = 2
+        if fric is not None:
+            if mode[j] == MODE_FREE and fric[j] > 0.0:
+                rel = v[nf + j] - v[ufloor[j]]
+                if rel == 0.0 and abs(s_j) < 0.5 * ud[j]:
+                    mode[j] = MODE_FLOOR
+                    check[j] = 2
+                else:
+                    sigma[j] = 1 if rel > 0.0 else -1
+
+
+@njit(cache=True, inline='always')
+def segment_load(p, record, harm, t, t_end):
+    """(r0, r1, theta0, t_next, tau_max): the load on the segment from t and where it may end at the latest."""
+    r0 = 0.0
+    r1 = 0.0
+    theta0 = 0.0
+    t_next = t_end
+    if record is not None:
+        r0, r1, t_next = record_value(record, p, t)
+        t_next = min(t_next, t_end)
+    if harm is not None:
+        theta0 = p[P_OMEGA] * t + p[P_PHI]
+    tau_max = t_next - t
+    if record is not None and t_next < t_end and abs(tau_max - p[P_REC_DT]) <= 1e-9 * p[P_REC_DT]:
+        # a whole sample step: its length is the record's dt, not the difference of two rounded times,
+        # so every such step shares one set of integral tables
+        tau_max = p[P_REC_DT]
+    return r0, r1, theta0, t_next, tau_max
+
+
+@njit(cache=True, inline='always')
+def integrate_energy(s, n, work, cu1, wt, tau, nf, building, units, springs, mode, load_vec, harm, record, theta0,
+                     r0, r1, kap, C, P, pair, single, mtab, cache, cv, pv, cu, pu, diag):
+    """The energy terms over the segment: from the modal tables under a record, from the rows under a harmonic."""
+    if harm is None:
+        integrate_modal(s, n, work, cu1, wt, tau, units, mode, load_vec, record, r0, r1, P, pair, single, mtab, cache,
+                        pu, diag)
+    else:
+        integrate_segment(kap, C, P, tau, nf, building, units, springs, mode, load_vec, harm, record,
+                          theta0, r0, r1, pair, single, cv, pv, cu, pu, diag)
+
+
+@njit(cache=True, inline='always')
+def move_to_end(nf, building, units, springs, fric, mode, sigma, kap, ek, C, P, tau, q, v, s_before, diag):
+    """The state at the segment's end, the friction work on the way, and the largest stored energy."""
+    ufloor = units[1]
+    if fric is not None:
+        for j in range(mode.shape[0]):
+            s_before[j] = q[nf + j] - q[ufloor[j]]
+    state_from_exp(kap, ek, C, P, tau, q, v)
+    if fric is not None:
+        for j in range(mode.shape[0]):
+            if mode[j] == MODE_FREE and fric[j] > 0.0:
+                # s' keeps its sign on a sliding segment: the work is exact
+                slid = q[nf + j] - q[ufloor[j]] - s_before[j]
+                diag[D_FRICTION] += units[2][j] * fric[j] * sigma[j] * slid
+    e_now = energy(building, units, springs, nf, q, v)
+    if e_now > diag[D_EMAX]:
+        diag[D_EMAX] = e_now
+
+
+@njit(cache=True, inline='always')
+def event_cap_reached(t, p, clock):
+    """Count the event in its period (clock = period index, events so far); True past the cap."""
+    pi_now = math.floor(t / p[P_PERIOD])
+    if pi_now != clock[0]:
+        clock[0] = pi_now
+        clock[1] = 0.0
+    clock[1] += 1.0
+    return clock[1] > p[P_MAXEV]
+
+
+@njit(cache=True)
+def handle_events(t, tau, p, nf, building, units, springs, fric, load_vec, harm, record, cache, ustate, q, v,
+                  seg, rows, vecs, events, tables, recs, irec, diag):
+    """Apply the events found at t, settle the contacts they leave and record the impacts; returns irec."""
+    mode, side, sigma, offset, escape, escape_v, check = ustate
+    kap, C, P = seg[0], seg[1], seg[2]
+    cs, ps, cq, pq = rows[0], rows[1], rows[2], rows[3]
+    v_before = vecs[4]
+    ev_t, ev_side, ev_kind, hit, impulse = events
+    work, cursor = tables[2], tables[3]
+    for i in range(q.shape[0]):
+        v_before[i] = v[i]
+    n_hit = resolve_events(t, tau, nf, building, units, fric, mode, side, sigma, offset, escape, escape_v,
+                           check, q, v, ev_t, ev_side, ev_kind, p[P_VSTICK], hit, impulse, diag)
+    if n_hit > 0:
+        diag[D_IMPACTS] += n_hit
+        if t >= p[P_TWIN]:
+            diag[D_IMPACTS_WIN] += n_hit
+        if n_hit > 1:
+            diag[D_SIMULTANEOUS] += 1.0
+    settle(t, p, nf, building, units, springs, fric, load_vec, harm, record, mode, side, sigma, offset,
+           escape, escape_v, check, q, v, cache, cursor, kap, C, P, cs, ps, cq, pq, work, diag)
+    if n_hit > 0:
+        irec = _record_impacts(t, nf, units, mode, side, hit, ev_side, v_before, v, impulse, recs, irec)
+    return irec
+
+
+@njit(cache=True)
+def _start(t, p, nf, building, units, springs, fric, load_vec, harm, record, cache, ustate, q, v, seg, rows, tables,
+           mon_peak, mon_peak_t, mon_x2, diag):
+    """The state a run starts from: contacts decided by the walls, diagnostics and monitors zeroed."""
+    mode, side, sigma, offset, escape, escape_v, check = ustate
+    for i in range(NDIAG):
+        diag[i] = 0.0
+    _initial_units(nf, units, fric, q, v, ustate)
+    settle(t, p, nf, building, units, springs, fric, load_vec, harm, record, mode, side, sigma, offset, escape,
+           escape_v, check, q, v, cache, tables[3], seg[0], seg[1], seg[2], rows[0], rows[1], rows[2], rows[3],
+           tables[2], diag)
+    diag[D_STICKS] = 0.0  # a unit placed on a wall is not a sticking episode
+    diag[D_E0] = energy(building, units, springs, nf, q, v)
+    diag[D_EMAX] = diag[D_E0]
+    for m in range(mon_peak.shape[0]):
+        mon_peak[m] = 0.0
+        mon_peak_t[m] = t
+        mon_x2[m] = 0.0
+
+
+@njit(cache=True)
+def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitors, q0, v0, mode0, side0,
+              cache, recs, diag, q_out, v_out, mon_peak, mon_peak_t, mon_x2, ts, samples):
+    """One run from p[P_T0] to p[P_TEND]; returns the number of impact records written.
+
+    building = (floor masses, storey stiffness matrix, damping matrix);
+    units = (kind, floor, mass, load per unit mass, gap, restitution);
+    monitors = (rows over the degrees of freedom, kind, record coefficient, cap of the peak);
+    mode0/side0: every unit's initial contact state; the walls decide at once
+    whether they hold a unit placed against them.
+    """
+    nf = building[0].shape[0]
+    nu = units[2].shape[0]
+    nt = cache[2].shape[1] + (2 if harm is not None else 0)
+    seg, rows, vecs, events, tables = _workspace(nt, nf + nu, nu, cache[5].shape[1], cache[0].shape[0],
+                                                 monitors[0].shape[0])
+    kap, C, P, ek, pair, single, kpow = seg
+    cs, ps, cq, pq, cm, pm, cv, pv, cu, pu = rows
+    stack, out, qs, vs, _, cu1, aw, s_before, wt = vecs
+    ev_t, ev_side, ev_kind = events[0], events[1], events[2]
+    mtab, dtab, work, cursor = tables
+    ustate = (mode0.copy(), side0.copy(), np.zeros(nu, dtype=np.int64), np.zeros(nu), np.zeros(nu, dtype=np.int64),
+              np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64))
+    mode, side, sigma, offset, escape, escape_v, check = ustate
+    q = q0.copy()
+    v = v0.copy()
+    t = p[P_T0]
+    t_end = p[P_TEND]
+    _start(t, p, nf, building, units, springs, fric, load_vec, harm, record, cache, ustate, q, v, seg, rows, tables,
+           mon_peak, mon_peak_t, mon_x2, diag)
+    its = 0  # the next sample time
+    while its < ts.shape[0] and ts[its] < t:
+        its += 1
+    irec = 0
+    clock = np.array([math.floor(t / p[P_PERIOD]), 0.0])
+    # what the slot, |kap|^n and the integral tables were last found for: scalars, not an array, so that
+    # they stay in registers (an inlined helper returning them cost 15 % of a run)
+    slot_key = -1
+    kpow_key = -1
+    tab_key = -1
+    tab_tau = -1.0
+    s = 0
+    omega = p[P_OMEGA]
+    while t < t_end:
+        r0, r1, theta0, t_next, tau_max = segment_load(p, record, harm, t, t_end)
+        key = config_key(mode)
+        if key != slot_key:
+            s = config_slot(building, units, springs, load_vec, omega if harm is not None else 0.0, mode, cache,
+                            cursor)
+            modal_slot(s, key, cache, nf, units, mode, monitors[0], monitors[1], mtab)
+            slot_key = key
+        build_segment(s, cache, units, springs, fric, mode, offset, sigma, nf, q, v, r0, r1, harm is not None, theta0,
+                      omega, kap, C, P, work)
+        if key != kpow_key:
+            kappa_powers(kap, kpow)
+            mode_weights(kap, wt)
+            kpow_key = key
+        if record is not None and (key != tab_key or tau_max != tab_tau):
+            # sampled loads repeat the same step in the same configuration: the tables carry over
+            step_tables(s, key, tau_max, p[P_REC_DT], kap, ek, pair, single, dtab)
+            tab_key = key
+            tab_tau = tau_max
+        diag[D_SEGMENTS] += 1.0
+        best = search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape, escape_v, tau_max,
+                             r0, r1, ev_t, ev_side, ev_kind, cs, ps, cq, pq, out, kpow, ek,
+                             tab_tau if key == tab_key else -1.0, wt, diag)
+        event = best <= tau_max and best < np.inf
+        tau = best if event else tau_max
+        n = cache[1][s]
+        wc = work[1]  # the segment's modal amplitudes are wc[2n:4n] (build_segment)
+        amplitude_moduli(n, wc, aw)
+        if key != tab_key or tau != tab_tau:
+            step_tables(s, key, tau, p[P_REC_DT] if record is not None else -1.0, kap, ek, pair, single, dtab)
+            tab_key = key
+            tab_tau = tau
+        integrate_energy(s, n, work, cu1, wt, tau, nf, building, units, springs, mode, load_vec, harm, record, theta0,
+                         r0, r1, kap, C, P, pair, single, mtab, cache, cv, pv, cu, pu, diag)
+        monitor_modal(s, n, wc, aw, kap, kpow, ek, C, P, tau, t, p[P_TWIN], monitors, r0, r1, harm is not None, mtab,
+                      pair, single, cm, pm, cs, ps, stack, wt, mon_peak, mon_peak_t, mon_x2, diag)
+        if its < ts.shape[0]:
+            its = sample_segment(kap, C, P, t, tau, ts, its, samples, qs, vs)
+        move_to_end(nf, building, units, springs, fric, mode, sigma, kap, ek, C, P, tau, q, v, s_before, diag)
+        t = t_next if not event else t + tau
+        for j in range(nu):
+            escape[j] = 0
+            escape_v[j] = 0
+        if not event:
+            continue
+        if event_cap_reached(t, p, clock):
+            diag[D_CAP] = 1.0
+            break
+        irec = handle_events(t, tau, p, nf, building, units, springs, fric, load_vec, harm, record, cache, ustate, q,
+                             v, seg, rows, vecs, events, tables, recs, irec, diag)
+        slot_key = -1  # settle may have filled (and so replaced) cache slots
+        tab_key = -1
+        kpow_key = -1
+    diag[D_E1] = energy(building, units, springs, nf, q, v)
+    diag[D_NREC] = irec
+    diag[D_TEND] = t
+    for i in range(nf + nu):
+        q_out[i] = q[i]
+        v_out[i] = v[i]
+    return irec
+
+
+purge_stale_cache(run_scene, "impact-core")

@@ -1,0 +1,277 @@
+"""Runs of scenes on the exact engine: the scene's arrays, the scene loop, and the measures it certifies.
+
+    result = simulate_scene(Scene(building, (damper,), load))
+    result.peak_roof_displacement, result.impacts, result.diagnostics
+
+The scene itself (:mod:`impact.model.scene`) is plain data; this module assembles the arrays the compiled loop
+(:mod:`impact.engine.scene_loop`) takes and reads its outputs back into a :class:`SceneResult`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from impact.engine import layout as L
+from impact.engine.contact import STICK_VELOCITY
+from impact.engine.diagnostics import read_diagnostics
+from impact.engine.jitcache import compile_lock
+from impact.engine.scene_loop import run_scene
+from impact.model.params import ParameterError
+from impact.model.scene import DAMPER_KINDS, ForceRecord, GroundMotion, Harmonic, Scene
+
+CACHE_SLOTS = 16        # configurations whose eigen-data are kept at once
+
+
+@dataclass
+class SceneResult:
+    """Measures of one scene run; lengths, times and accelerations in the scene's units."""
+
+    scene: Scene
+    peak_roof_displacement: float
+    peak_roof_displacement_time: float
+    rms_roof_displacement: float
+    peak_roof_acceleration: float
+    peak_interstorey_drift: float
+    peak_drifts: np.ndarray
+    peak_strokes: np.ndarray
+    impacts: int
+    diagnostics: dict
+    final_q: np.ndarray
+    final_v: np.ndarray
+    records: dict | None = field(default=None, repr=False)
+    samples: dict | None = field(default=None, repr=False)
+
+    def as_json(self, units: str = "m") -> dict:
+        return {
+            f"peak_roof_displacement_{units}": self.peak_roof_displacement,
+            f"rms_roof_displacement_{units}": self.rms_roof_displacement,
+            f"peak_roof_acceleration_{units}s2": self.peak_roof_acceleration,
+            f"peak_interstorey_drift_{units}": self.peak_interstorey_drift,
+            f"peak_damper_stroke_{units}": [float(x) for x in self.peak_strokes],
+            "impacts": self.impacts,
+            "diagnostics": self.diagnostics,
+        }
+
+
+# ----------------------------------------------------------------------------
+# assembly of the kernel's arrays
+# ----------------------------------------------------------------------------
+
+def _unit_arrays(scene: Scene, omega1: float):
+    units = scene.unit_list()
+    kind = np.array([DAMPER_KINDS.index(d.kind) for _, d in units], dtype=np.int64)
+    floor = np.array([scene.floor_index(d.floor) for _, d in units], dtype=np.int64)
+    mass = np.array([d.mass / d.units for _, d in units])
+    gap = np.array([d.gap if d.has_walls else 0.0 for _, d in units])
+    e = np.array([d.e for _, d in units])
+    k = np.array([m * (d.tuning * omega1) ** 2 if d.kind != "cid" else 0.0 for m, (_, d) in zip(mass, units)])
+    c = np.array([2.0 * m * d.damping * d.tuning * omega1 if d.kind != "cid" else 0.0
+                  for m, (_, d) in zip(mass, units)])
+    a_f = np.array([d.nu * scene.gravity for _, d in units])
+    return kind, floor, mass, gap, e, k, c, a_f
+
+
+def _load_arrays(scene: Scene, mass_full: np.ndarray):
+    """(load vector over all degrees of freedom, harmonic, record values, mon_rec, record dt)."""
+    nf = scene.building.storeys
+    load = scene.load
+    vec = np.zeros(len(mass_full))
+    if isinstance(load, Harmonic):
+        vec[scene.floor_index(load.floor)] = load.amplitude
+        return vec, np.array([load.amplitude]), None, 0.0, 1.0
+    if isinstance(load, GroundMotion):
+        return -mass_full, None, load.accel, 1.0, load.dt
+    if isinstance(load, ForceRecord):
+        dist = load.distribution
+        if len(dist) not in (nf, len(mass_full)):
+            raise ParameterError(f"distribution has {len(dist)} entries: give one per floor ({nf}) "
+                                 f"or one per floor and damper unit ({len(mass_full)})")
+        vec[:len(dist)] = dist
+        return vec, None, load.values, 0.0, load.dt
+    raise ParameterError(f"load of type {type(load).__name__} is not supported: Harmonic, GroundMotion or ForceRecord")
+
+
+def _monitors(scene: Scene, nfull: int):
+    """Rows: roof displacement, roof absolute acceleration, each storey's drift, each damper's stroke.
+
+    Also each row's cap: a bound its peak cannot pass (beyond the contact tolerance).  A stroke between
+    walls reaches its cap, half the gap, at the first impact; the kernel stops searching it from then on.
+    """
+    nf = scene.building.storeys
+    rows = []
+    kinds = []
+    roof = np.zeros(nfull)
+    roof[nf - 1] = 1.0
+    rows += [roof, roof]
+    kinds += [L.MON_DISP, L.MON_ACCEL]
+    caps = [math.inf] * (2 + nf)
+    for i in range(nf):
+        r = np.zeros(nfull)
+        r[i] = 1.0
+        if i > 0:
+            r[i - 1] = -1.0
+        rows.append(r)
+        kinds.append(L.MON_DISP)
+    first = 0
+    for d in scene.dampers:
+        r = np.zeros(nfull)
+        r[nf + first] = 1.0
+        r[scene.floor_index(d.floor)] -= 1.0
+        rows.append(r)
+        kinds.append(L.MON_DISP)
+        caps.append(0.5 * d.gap if d.kind in ("cid", "pid") else math.inf)
+        first += int(d.units)
+    return np.array(rows), np.array(kinds, dtype=np.int64), np.array(caps)
+
+
+def _initial_state(scene: Scene, floor: np.ndarray, gap: np.ndarray, kind: np.ndarray, nfull: int):
+    nf = scene.building.storeys
+    q = np.zeros(nfull)
+    mode = np.zeros(len(gap), dtype=np.int64)
+    side = np.zeros(len(gap), dtype=np.int64)
+    for j in range(len(gap)):
+        if kind[j] == L.KIND_TMD:
+            continue
+        if gap[j] == 0.0:
+            mode[j] = L.MODE_LOCKED
+        elif scene.unit_starts is not None:
+            x = scene.unit_starts[j]
+            q[nf + j] = x
+            if abs(x) == 0.5 * gap[j]:  # on a wall: resting against it, as the protocol's wall starts
+                mode[j], side[j] = L.MODE_STUCK, (1 if x > 0 else -1)
+        elif scene.start != "centre":
+            s = 1 if scene.start == "right" else -1
+            q[nf + j] = s * 0.5 * gap[j]
+            mode[j] = L.MODE_STUCK
+            side[j] = s
+    return q, np.zeros(nfull), mode, side
+
+
+def _cache(nmax: int):
+    s = CACHE_SLOTS
+    return (np.full(s, -1, dtype=np.int64), np.zeros(s, dtype=np.int64),
+            np.zeros((s, 2 * nmax), dtype=np.complex128), np.zeros((s, 2 * nmax, 2 * nmax), dtype=np.complex128),
+            np.zeros((s, 2 * nmax, 2 * nmax), dtype=np.complex128), np.zeros((s, nmax, nmax)),
+            np.zeros((s, nmax, nmax)), np.zeros((s, nmax), dtype=np.int64), np.zeros((s, nmax)),
+            np.zeros((s, 2 * nmax), dtype=np.complex128))
+
+
+def _scene_arrays(scene: Scene):
+    b = scene.building
+    omega1 = b.omega1
+    kind, floor, mass, gap, e, k, c, a_f = _unit_arrays(scene, omega1)
+    nf = b.storeys
+    mass_full = np.concatenate([b.masses, mass])
+    load_vec, harm, record, mon_rec, rec_dt = _load_arrays(scene, mass_full)
+    uload = load_vec[nf:] / mass if len(mass) else np.zeros(0)
+    if harm is not None and np.any(uload != 0.0):
+        raise ParameterError("a harmonic load acts on a floor, not on a damper unit")
+    building = (b.masses.copy(), b.stiffness, b.damping.copy())
+    units = (kind, floor, mass, uload, gap, e)
+    springs = (k, c) if np.any(kind != L.KIND_CID) else None
+    fric = a_f if np.any(a_f > 0.0) else None
+    rows, kinds, caps = _monitors(scene, nf + len(mass))
+    monitors = (rows, kinds, np.where(kinds == L.MON_ACCEL, mon_rec, 0.0), caps)
+    n_spring = int(np.sum(kind != L.KIND_CID)) if springs is not None else 0
+    p = np.zeros(L.NPAR)
+    p[L.P_T0] = 0.0
+    p[L.P_TEND] = scene.t_end
+    p[L.P_TWIN] = scene.t_window
+    p[L.P_MAXEV] = scene.max_events_per_period
+    p[L.P_PERIOD] = 2.0 * math.pi / omega1
+    if harm is not None:
+        p[L.P_OMEGA] = scene.load.omega
+        p[L.P_PHI] = scene.load.phase
+        p[L.P_F0] = scene.load.amplitude
+        scale = scene.load.amplitude
+    else:
+        scale = float(np.sum(np.abs(load_vec)) * np.max(np.abs(record)))
+    p[L.P_VSTICK] = STICK_VELOCITY * scale / (float(np.sum(mass_full)) * omega1) if scale > 0 else 0.0
+    p[L.P_REC_T0] = 0.0
+    p[L.P_REC_DT] = rec_dt
+    q0, v0, mode0, side0 = _initial_state(scene, floor, gap, kind, nf + len(mass))
+    return dict(p=p, building=building, units=units, springs=springs, fric=fric, load_vec=load_vec, harm=harm,
+                record=record, monitors=monitors, q0=q0, v0=v0, mode0=mode0, side0=side0,
+                cache=_cache(nf + n_spring))
+
+
+def run_arrays(arrays: dict, record: int = 0, times=None):
+    """Run the kernel on prepared arrays; returns the raw outputs (for benchmarks and tests)."""
+    nfull = len(arrays["q0"])
+    nmon = len(arrays["monitors"][1])
+    ts = np.asarray(times, dtype=float) if times is not None else np.zeros(0)
+    out = dict(recs=np.zeros((int(record), L.NREC)), diag=np.zeros(L.NDIAG), q=np.zeros(nfull), v=np.zeros(nfull),
+               peak=np.zeros(nmon), peak_t=np.zeros(nmon), x2=np.zeros(nmon), ts=ts,
+               samples=np.zeros((len(ts), 2 * nfull)))
+    a = arrays
+    cache = tuple(c.copy() for c in a["cache"])
+    run_scene(a["p"], a["building"], a["units"], a["springs"], a["fric"], a["load_vec"], a["harm"], a["record"],
+              a["monitors"], a["q0"], a["v0"], a["mode0"], a["side0"], cache, out["recs"], out["diag"], out["q"],
+              out["v"], out["peak"], out["peak_t"], out["x2"], ts, out["samples"])
+    return out
+
+
+def simulate_scene(scene: Scene, *, record: int = 0, times=None) -> SceneResult:
+    """Run a scene on the exact core.
+
+    record: keep up to this many impact records; times: sorted times at which
+    to sample the state of every degree of freedom (dense output).
+    """
+    arrays = _scene_arrays(scene)
+    key = _signature_key(arrays)
+    if key not in _WARM:
+        with compile_lock():
+            out = run_arrays(arrays, record, times)
+        _WARM.add(key)
+    else:
+        out = run_arrays(arrays, record, times)
+    return _result(scene, arrays, out)
+
+
+_WARM: set = set()
+
+
+def _signature_key(arrays: dict) -> tuple:
+    return tuple(arrays[k] is None for k in ("springs", "fric", "harm", "record"))
+
+
+def _result(scene: Scene, arrays: dict, out: dict) -> SceneResult:
+    nf = scene.building.storeys
+    diag = out["diag"]
+    span = diag[L.D_TEND] - scene.t_window
+    complete = not diag[L.D_CAP] and span > 0
+    rms = math.sqrt(out["x2"][0] / span) if complete else math.nan
+    records = None
+    if out["recs"].shape[0]:
+        n = int(diag[L.D_NREC])
+        cols = ("t", "unit", "side", "v_minus", "w_minus", "v_plus", "w_plus", "stuck", "impulse")
+        records = {c: out["recs"][:n, i].copy() for i, c in enumerate(cols)}
+    samples = None
+    if len(out["ts"]):
+        nfull = len(out["q"])
+        samples = {"t": out["ts"], "q": out["samples"][:, :nfull], "v": out["samples"][:, nfull:]}
+    peaks = out["peak"]
+    return SceneResult(
+        scene=scene,
+        peak_roof_displacement=float(peaks[0]) if complete else math.nan,
+        peak_roof_displacement_time=float(out["peak_t"][0]),
+        rms_roof_displacement=rms,
+        peak_roof_acceleration=float(peaks[1]) if complete else math.nan,
+        peak_interstorey_drift=float(np.max(peaks[2:2 + nf])) if complete else math.nan,
+        peak_drifts=peaks[2:2 + nf].copy(),
+        peak_strokes=peaks[2 + nf:].copy(),
+        impacts=int(diag[L.D_IMPACTS]),
+        diagnostics=read_diagnostics(diag, L),
+        final_q=out["q"].copy(),
+        final_v=out["v"].copy(),
+        records=records,
+        samples=samples,
+    )
+
+
+def amplitude(result: SceneResult) -> float:
+    """The paper's amplitude sqrt(2) RMS of the roof over the window."""
+    return math.sqrt(2.0) * result.rms_roof_displacement

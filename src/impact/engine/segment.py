@@ -1,0 +1,572 @@
+"""Closed-form flow of a scene between events.
+
+A *configuration* is the set of damper units that move with their floor
+(stuck at a wall, locked with d = 0, or dragged by friction).  Those units
+add their mass to the floor; a PID's or TMD's spring then becomes internal.
+The other units with a spring (PID, TMD) are degrees of freedom of the linear
+system; a free CID unit has no spring, so its flight is a polynomial and it
+does not enter the eigen-problem at all.  Each configuration's eigen-data
+are computed once and kept in a small cache (slots, replaced in turn).
+
+The load on a segment is either harmonic (two slots exp(+-i Omega tau) at the
+end of the coefficient vector) or a polynomial of degree 1 (a piecewise-linear
+record between two samples), whose particular solution is a polynomial too:
+q_p = K^-1 (g0 - C K^-1 g1) + K^-1 g1 tau.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from impact.engine.layout import KIND_CID, MODE_FREE, NPOLY
+
+_SERIES = 0.5  # |z T| below which the integrals use their power series
+_RECIP = np.concatenate((np.zeros(1), 1.0 / np.arange(1.0, 46.0)))  # _RECIP[n] = 1 / n
+
+
+# ----------------------------------------------------------------------------
+# evaluation of one coefficient-form row
+# ----------------------------------------------------------------------------
+
+@njit(cache=True)
+def poly_at(p, tau):
+    return p[0] + tau * (p[1] + tau * (p[2] + tau * p[3]))
+
+
+@njit(cache=True)
+def eval2(kap, c, p, tau):
+    """h(tau) and h'(tau)."""
+    h = 0.0
+    dh = 0.0
+    for k in range(kap.shape[0]):
+        ck = c[k]
+        if ck.real != 0.0 or ck.imag != 0.0:
+            kk = kap[k]
+            if kk.real == 0.0 and kk.imag == 0.0:
+                h += ck.real  # a constant: exp(0) = 1 exactly, no exponential to evaluate
+                continue
+            z = ck * np.exp(kk * tau)
+            h += z.real
+            dh += (z * kk).real
+    # this order of sums, with p[0] and p[3] last, makes a row with p[0] = p[3] = 0 give the very bits
+    # of the paper kernel's h + p1 tau + p2 tau^2: both kernels share this search and must not drift apart
+    return (h + p[1] * tau + p[2] * tau * tau + p[0] + p[3] * tau * tau * tau,
+            dh + p[1] + 2.0 * p[2] * tau + 3.0 * p[3] * tau * tau)
+
+
+@njit(cache=True)
+def eval3(kap, c, p, tau):
+    """h, h' and h'' at tau."""
+    h = 0.0
+    dh = 0.0
+    ddh = 0.0
+    for k in range(kap.shape[0]):
+        ck = c[k]
+        if ck.real != 0.0 or ck.imag != 0.0:
+            z = ck * np.exp(kap[k] * tau)
+            h += z.real
+            z = z * kap[k]
+            dh += z.real
+            ddh += (z * kap[k]).real
+    h += poly_at(p, tau)
+    dh += p[1] + tau * (2.0 * p[2] + 3.0 * tau * p[3])
+    ddh += 2.0 * p[2] + 6.0 * tau * p[3]
+    return h, dh, ddh
+
+
+@njit(cache=True)
+def deriv_at0(kap, c, p, n):
+    """n-th derivative at tau = 0 (exponential and polynomial parts)."""
+    acc = 0.0
+    for k in range(kap.shape[0]):
+        z = c[k]
+        for _ in range(n):
+            z = z * kap[k]
+        acc += z.real
+    if n <= 3:
+        fact = 1.0
+        for i in range(2, n + 1):
+            fact *= i
+        acc += fact * p[n]
+    return acc
+
+
+@njit(cache=True)
+def bound(kap, c, p, n, tau_max):
+    """Bound on |n-th derivative| over [0, tau_max].
+
+    Every homogeneous mode decays or oscillates (Re kap <= 0) and the
+    harmonic slots have |exp| = 1, so |exp(kap tau)| <= 1.
+    """
+    acc = 0.0
+    for k in range(kap.shape[0]):
+        acc += abs(c[k]) * abs(kap[k]) ** n
+    return acc + poly_bound(p, n, tau_max)
+
+
+@njit(cache=True)
+def poly_bound(p, n, tau_max):
+    """Bound on |n-th derivative| of the polynomial part over [0, tau_max]."""
+    if n == 0:
+        return abs(p[0]) + tau_max * (abs(p[1]) + tau_max * (abs(p[2]) + tau_max * abs(p[3])))
+    if n == 1:
+        return abs(p[1]) + tau_max * (2.0 * abs(p[2]) + 3.0 * tau_max * abs(p[3]))
+    if n == 2:
+        return 2.0 * abs(p[2]) + 6.0 * tau_max * abs(p[3])
+    if n == 3:
+        return 6.0 * abs(p[3])
+    return 0.0
+
+
+@njit(cache=True)
+def kappa_powers(kap, kpow):
+    """kpow[n, k] = |kap_k|^n, n = 0..4, for bound_tab."""
+    for k in range(kap.shape[0]):
+        a = abs(kap[k])
+        kpow[0, k] = 1.0
+        for n in range(1, kpow.shape[0]):
+            kpow[n, k] = kpow[n - 1, k] * a
+
+
+@njit(cache=True)
+def bound_tab(kpow, c, p, n, tau_max):
+    """bound() with the powers of |kap| from a table: the scene core's hot paths call it every step."""
+    acc = 0.0
+    for k in range(c.shape[0]):
+        ck = c[k]
+        if ck.real != 0.0 or ck.imag != 0.0:
+            acc += np.sqrt(ck.real * ck.real + ck.imag * ck.imag) * kpow[n, k]
+    return acc + poly_bound(p, n, tau_max)
+
+
+@njit(cache=True)
+def derivative_row(kap, c, p, cd, pd):
+    """The derivative of a row, written into (cd, pd)."""
+    for k in range(kap.shape[0]):
+        cd[k] = c[k] * kap[k]
+    pd[0] = p[1]
+    pd[1] = 2.0 * p[2]
+    pd[2] = 3.0 * p[3]
+    pd[3] = 0.0
+
+
+@njit(cache=True)
+def state_at(kap, C, P, tau, q, v):
+    """Positions and velocities of every degree of freedom at tau."""
+    nt = kap.shape[0]
+    ek = np.empty(nt, dtype=np.complex128)
+    for k in range(nt):
+        ek[k] = np.exp(kap[k] * tau)
+    state_from_exp(kap, ek, C, P, tau, q, v)
+
+
+@njit(cache=True, inline='always')
+def state_from_exp(kap, ek, C, P, tau, q, v):
+    """state_at with ek = exp(kap tau) given."""
+    nt = kap.shape[0]
+    for i in range(C.shape[0]):
+        x = 0.0
+        dx = 0.0
+        for k in range(nt):
+            ck = C[i, k]
+            if ck.real != 0.0 or ck.imag != 0.0:
+                z = ck * ek[k]
+                x += z.real
+                dx += (z * kap[k]).real
+        p = P[i]
+        q[i] = x + poly_at(p, tau)
+        v[i] = dx + p[1] + tau * (2.0 * p[2] + 3.0 * tau * p[3])
+
+
+# ----------------------------------------------------------------------------
+# configurations: assembly and eigen-data, cached
+# ----------------------------------------------------------------------------
+
+@njit(cache=True)
+def config_key(mode):
+    key = 0
+    for j in range(mode.shape[0]):
+        if mode[j] != MODE_FREE:
+            key |= 1 << j
+    return key
+
+
+@njit(cache=True)
+def _assemble(building, units, springs, load_vec, mode, cache, s):
+    """Reduced M, K, C and the reduced load of one configuration, into slot s."""
+    mb, kb, cb = building
+    ukind, ufloor, um = units[0], units[1], units[2]
+    keys, nr, lam, vec, vinv, kinv, cred, fidx, ellr, zc = cache
+    nf = mb.shape[0]
+    nu = um.shape[0]
+    fidx[s, :] = -1
+    n = nf
+    for i in range(nf):
+        fidx[s, i] = i
+    if springs is not None:
+        for j in range(nu):
+            if ukind[j] != KIND_CID and mode[j] == MODE_FREE:
+                fidx[s, n] = nf + j
+                n += 1
+    m = np.zeros(n)
+    kr = np.zeros((n, n))
+    cr = np.zeros((n, n))
+    lr = np.zeros(n)
+    for a in range(nf):
+        m[a] = mb[a]
+        lr[a] = load_vec[a]
+        for b in range(nf):
+            kr[a, b] = kb[a, b]
+            cr[a, b] = cb[a, b]
+    for j in range(nu):
+        if mode[j] != MODE_FREE:
+            f = ufloor[j]
+            m[f] += um[j]
+            lr[f] += load_vec[nf + j]
+    if springs is not None:
+        uk, uc = springs
+        for r in range(nf, n):
+            j = fidx[s, r] - nf
+            f = ufloor[j]
+            m[r] = um[j]
+            lr[r] = load_vec[nf + j]
+            kr[f, f] += uk[j]
+            kr[r, r] += uk[j]
+            kr[f, r] -= uk[j]
+            kr[r, f] -= uk[j]
+            cr[f, f] += uc[j]
+            cr[r, r] += uc[j]
+            cr[f, r] -= uc[j]
+            cr[r, f] -= uc[j]
+    a_mat = np.zeros((2 * n, 2 * n), dtype=np.complex128)
+    for i in range(n):
+        a_mat[i, n + i] = 1.0
+        for j in range(n):
+            a_mat[n + i, j] = -kr[i, j] / m[i]
+            a_mat[n + i, n + j] = -cr[i, j] / m[i]
+    w, v = np.linalg.eig(a_mat)
+    vi = np.linalg.inv(v)
+    ki = np.linalg.inv(kr)
+    nr[s] = n
+    lam[s, :] = 0.0
+    vec[s, :, :] = 0.0
+    vinv[s, :, :] = 0.0
+    kinv[s, :, :] = 0.0
+    cred[s, :, :] = 0.0
+    ellr[s, :] = 0.0
+    for i in range(2 * n):
+        lam[s, i] = w[i]
+        for j in range(2 * n):
+            vec[s, i, j] = v[i, j]
+            vinv[s, i, j] = vi[i, j]
+    for i in range(n):
+        ellr[s, i] = lr[i]
+        for j in range(n):
+            kinv[s, i, j] = ki[i, j]
+            cred[s, i, j] = cr[i, j]
+    return a_mat, m, lr, n
+
+
+@njit(cache=True)
+def config_slot(building, units, springs, load_vec, omega, mode, cache, cursor):
+    """The cache slot holding this configuration's eigen-data (assembled on a miss).
+
+    omega > 0: the load is harmonic at that frequency and the slot also holds
+    the complex amplitude zc of the particular solution per unit load.
+    cursor: one-element array, the slot to replace next.
+    """
+    keys = cache[0]
+    key = config_key(mode)
+    for s in range(keys.shape[0]):
+        if keys[s] == key:
+            return s
+    s = cursor[0]
+    cursor[0] = (s + 1) % keys.shape[0]
+    a_mat, m, lr, n = _assemble(building, units, springs, load_vec, mode, cache, s)
+    zc = cache[9]
+    zc[s, :] = 0.0
+    if omega > 0.0:
+        # particular solution mode by mode: a mode the load does not reach (the opposite swing of
+        # identical undamped pendulums, say) has no part in it even when it sits at the load's frequency
+        vec, vinv = cache[3], cache[4]
+        rhs = np.zeros(2 * n, dtype=np.complex128)
+        for i in range(n):
+            rhs[n + i] = lr[i] / m[i]
+        modal = np.zeros(2 * n, dtype=np.complex128)
+        size = 0.0
+        for k in range(2 * n):
+            for i in range(2 * n):
+                modal[k] += vinv[s, k, i] * rhs[i]
+            size = max(size, abs(modal[k]))
+        for k in range(2 * n):
+            if abs(modal[k]) <= 1e-13 * size:
+                modal[k] = 0.0
+            else:
+                gap = 1j * omega - cache[2][s, k]
+                if abs(gap) <= 1e-12 * abs(cache[2][s, k]):
+                    raise ValueError("the harmonic load drives an undamped mode at its natural frequency: "
+                                     "the forced response is unbounded (add damping or change the frequency)")
+                modal[k] = modal[k] / gap
+        for i in range(2 * n):
+            acc = 0.0 + 0.0j
+            for k in range(2 * n):
+                acc += vec[s, i, k] * modal[k]
+            zc[s, i] = acc
+    keys[s] = key
+    return s
+
+
+# ----------------------------------------------------------------------------
+# a segment
+# ----------------------------------------------------------------------------
+
+@njit(cache=True, inline='always')
+def build_segment(s, cache, units, springs, fric, mode, offset, sigma, nf, q, v,
+                  r0, r1, harmonic, theta0, omega, kap, C, P, work):
+    """Coefficient rows of every degree of freedom from state (q, v).
+
+    r0 + r1 tau: the record's value on the segment (per unit of load_vec);
+    harmonic: the load is sin(theta0 + omega tau) per unit of load_vec.
+    work = (floats, complexes): scratch of 7 and 4 times the largest reduced size, so that a
+    segment allocates nothing; the modal amplitudes are left in complexes[2n:4n] and the particular
+    solution's velocity in floats[2n:3n] (the modal shortcuts read them).
+    """
+    keys, nr, lam, vec, vinv, kinv, cred, fidx, ellr, zc = cache
+    ufloor, um, uload = units[1], units[2], units[3]
+    n = nr[s]
+    nt = kap.shape[0]
+    for k in range(nt):
+        kap[k] = 0.0
+    for k in range(2 * n):
+        kap[k] = lam[s, k]
+    if harmonic:
+        kap[nt - 2] = 1j * omega
+        kap[nt - 1] = -1j * omega
+    # scratch by offset, not by slices: a slice is a new array object on every segment
+    # (wf: g0 | g1 | u1 | qp | tmp | dz, the state minus the particular solution; wc[2n:4n]: amplitudes)
+    wf, wc = work
+    G0, G1, U1, QP, TMP, DZ = 0, n, 2 * n, 3 * n, 4 * n, 5 * n
+    for i in range(n):
+        wf[G0 + i] = ellr[s, i] * r0
+        wf[G1 + i] = ellr[s, i] * r1
+    if fric is not None:
+        for j in range(um.shape[0]):
+            if mode[j] == MODE_FREE and fric[j] > 0.0:
+                # a sliding mass drags its floor along with m a_f sigma
+                wf[G0 + ufloor[j]] += um[j] * fric[j] * sigma[j]
+    for i in range(n):
+        wf[U1 + i] = 0.0
+        wf[QP + i] = 0.0
+        wf[TMP + i] = wf[G0 + i]
+    for i in range(n):
+        for j in range(n):
+            wf[U1 + i] += kinv[s, i, j] * wf[G1 + j]
+    for i in range(n):
+        for j in range(n):
+            wf[TMP + i] -= cred[s, i, j] * wf[U1 + j]
+    for i in range(n):
+        for j in range(n):
+            wf[QP + i] += kinv[s, i, j] * wf[TMP + j]
+    ph = np.exp(1j * theta0)
+    for i in range(n):
+        full = fidx[s, i]
+        wf[DZ + i] = q[full] - wf[QP + i]
+        wf[DZ + n + i] = v[full] - wf[U1 + i]
+        if harmonic:
+            wf[DZ + i] -= (zc[s, i] * ph).imag
+            wf[DZ + n + i] -= (zc[s, n + i] * ph).imag
+    W = 2 * n  # the modal amplitudes, once for every row
+    for k in range(2 * n):
+        wk = 0.0 + 0.0j
+        for l in range(2 * n):
+            wk += vinv[s, k, l] * wf[DZ + l]
+        wc[W + k] = wk
+    for i in range(n):
+        full = fidx[s, i]
+        for k in range(nt):
+            C[full, k] = 0.0
+        for k in range(2 * n):
+            C[full, k] = vec[s, i, k] * wc[W + k]
+        if harmonic:
+            ch = zc[s, i] * ph / 2j
+            C[full, nt - 2] = ch
+            C[full, nt - 1] = ch.conjugate()
+        P[full, 0] = wf[QP + i]
+        P[full, 1] = wf[U1 + i]
+        P[full, 2] = 0.0
+        P[full, 3] = 0.0
+    _copy_identical_rows(units, springs, mode, nf, q, v, C, P)
+    for j in range(um.shape[0]):
+        row = nf + j
+        if mode[j] != MODE_FREE:
+            f = ufloor[j]
+            for k in range(nt):
+                C[row, k] = C[f, k]
+            for k in range(NPOLY):
+                P[row, k] = P[f, k]
+            P[row, 0] += offset[j]
+        elif units[0][j] == KIND_CID:
+            for k in range(nt):
+                C[row, k] = 0.0
+            a0 = uload[j] * r0
+            a1 = uload[j] * r1
+            if fric is not None:
+                a0 -= fric[j] * sigma[j]
+            P[row, 0] = q[row]
+            P[row, 1] = v[row]
+            P[row, 2] = 0.5 * a0
+            P[row, 3] = a1 / 6.0
+
+
+@njit(cache=True)
+def same_unit(units, springs, i, j):
+    """Whether units i and j are identical: kind, floor, mass, load, gap, restitution, spring and dashpot."""
+    kind, floor, mass, load, gap, rest = units
+    if kind[i] != kind[j] or floor[i] != floor[j] or mass[i] != mass[j] or load[i] != load[j] \
+            or gap[i] != gap[j] or rest[i] != rest[j]:
+        return False
+    if springs is not None:
+        if springs[0][i] != springs[0][j] or springs[1][i] != springs[1][j]:
+            return False
+    return True
+
+
+@njit(cache=True, inline='always')
+def _copy_identical_rows(units, springs, mode, nf, q, v, C, P):
+    """Identical spring units in identical states move identically: give them the same row, bit for bit.
+
+    The eigen-basis of a system with identical units is degenerate and
+    arbitrary, so their rows computed one by one differ by round-off, which
+    would split a multi-unit damper's simultaneous impacts into a cascade.
+    By the permutation symmetry the exact rows are equal; copying keeps them so.
+    """
+    kind = units[0]
+    for j in range(1, kind.shape[0]):
+        i = j - 1
+        if kind[j] == KIND_CID or mode[j] != MODE_FREE or mode[i] != MODE_FREE:
+            continue
+        if not same_unit(units, springs, i, j):
+            continue
+        if q[nf + i] != q[nf + j] or v[nf + i] != v[nf + j]:
+            continue
+        for k in range(C.shape[1]):
+            C[nf + j, k] = C[nf + i, k]
+        for k in range(NPOLY):
+            P[nf + j, k] = P[nf + i, k]
+
+
+# ----------------------------------------------------------------------------
+# exact integrals over [0, T]
+# ----------------------------------------------------------------------------
+
+@njit(cache=True)
+def _phi0(z, big_t, ez):
+    """Integral over [0, T] of exp(z tau); ez = exp(z T)."""
+    zt = z * big_t
+    if abs(zt) < 1e-3:
+        return big_t * (1.0 + zt * (0.5 + zt * (1.0 / 6.0 + zt * (1.0 / 24.0 + zt * (1.0 / 120.0 + zt / 720.0)))))
+    return (ez - 1.0) / z
+
+
+@njit(cache=True)
+def _phi_m(z, big_t, ez, out):
+    """out[m] = integral over [0, T] of tau^m exp(z tau), m = 0..3."""
+    zt = z * big_t
+    if zt.real * zt.real + zt.imag * zt.imag < _SERIES * _SERIES:
+        # sum_n (zT)^n / n! T^(m+1) / (n + m + 1): every m in one pass (reciprocals from a table: a
+        # segment after every event builds these tables, and divisions dominated it)
+        term = 1.0 + 0.0j
+        a0 = 0.0 + 0.0j
+        a1 = 0.0 + 0.0j
+        a2 = 0.0 + 0.0j
+        a3 = 0.0 + 0.0j
+        for n in range(40):
+            a0 += term * _RECIP[n + 1]
+            a1 += term * _RECIP[n + 2]
+            a2 += term * _RECIP[n + 3]
+            a3 += term * _RECIP[n + 4]
+            term = term * zt * _RECIP[n + 1]
+            if term.real * term.real + term.imag * term.imag < 1e-36:
+                break
+        out[0] = a0 * big_t
+        out[1] = a1 * big_t ** 2
+        out[2] = a2 * big_t ** 3
+        out[3] = a3 * big_t ** 4
+        return
+    val = (ez - 1.0) / z
+    out[0] = val
+    for i in range(1, NPOLY):
+        val = (big_t ** i * ez - i * val) / z
+        out[i] = val
+
+
+@njit(cache=True)
+def integral_tables(kap, ek, big_t, pair, single):
+    """Tables for int_prod over [0, T]: pair[k, l] of exp((kap_k + kap_l) tau), single[k, m] of tau^m exp(kap_k tau)."""
+    nt = kap.shape[0]
+    buf = np.empty(NPOLY, dtype=np.complex128)
+    for k in range(nt):
+        for l in range(k, nt):
+            v = _phi0(kap[k] + kap[l], big_t, ek[k] * ek[l])
+            pair[k, l] = v
+            pair[l, k] = v
+        _phi_m(kap[k], big_t, ek[k], buf)
+        for m in range(NPOLY):
+            single[k, m] = buf[m]
+
+
+@njit(cache=True)
+def int_prod(big_t, pair, single, ca, pa, cb, pb):
+    """Integral over [0, T] of the product of two rows, from the tables of integral_tables."""
+    if big_t <= 0.0:
+        return 0.0
+    nt = ca.shape[0]
+    acc = 0.0 + 0.0j
+    # plain multiply-adds, no tests for zero coefficients: the branches cost more than they save
+    for j in range(nt):
+        inner = 0.0 + 0.0j
+        for l in range(nt):
+            inner += cb[l] * pair[j, l]
+        cross = 0.0 + 0.0j
+        for m in range(NPOLY):
+            inner += pb[m] * single[j, m]
+            cross += pa[m] * single[j, m]
+        acc += ca[j] * inner + cb[j] * cross
+    return acc.real + poly_integral(pa, pb, big_t)
+
+
+@njit(cache=True, inline='always')
+def poly_integral(pa, pb, big_t):
+    """Integral over [0, T] of the product of two cubic polynomials."""
+    out = 0.0
+    for i in range(NPOLY):
+        if pa[i] == 0.0:
+            continue
+        for j in range(NPOLY):
+            if pb[j] != 0.0:
+                tp = big_t
+                for _ in range(i + j):
+                    tp *= big_t
+                out += pa[i] * pb[j] * tp / (i + j + 1)
+    return out
+
+@njit(cache=True, inline='always')
+def energy(building, units, springs, nf, q, v):
+    """Kinetic plus elastic energy of the scene (relative coordinates)."""
+    mb, kb, _ = building
+    ufloor, um = units[1], units[2]
+    e = 0.0
+    for a in range(nf):
+        e += 0.5 * mb[a] * v[a] * v[a]
+        for b in range(nf):
+            e += 0.5 * q[a] * kb[a, b] * q[b]
+    for j in range(um.shape[0]):
+        e += 0.5 * um[j] * v[nf + j] * v[nf + j]
+    if springs is not None:
+        uk = springs[0]
+        for j in range(um.shape[0]):
+            if uk[j] != 0.0:
+                s = q[nf + j] - q[ufloor[j]]
+                e += 0.5 * uk[j] * s * s
+    return e

@@ -1,0 +1,203 @@
+"""Model parameters and the response protocol, in model units.
+
+Model units (model.md, "Symbols and scaling"): the structure's mass M = 1, its
+natural frequency omega = 1 (time unit 1/omega, natural period 2*pi) and lengths
+in the paper's "units".  The force amplitude enters as the static deflection
+``force_ratio`` = F0/K, so the bare structure's resonant amplitude is
+A_max = (F0/K) / (2 beta).
+
+Every constructor validates its input and raises :class:`ParameterError`
+naming the field and its allowed range, so the command line, the pipeline and
+the library refuse bad input with the same words.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import KW_ONLY, asdict, dataclass, field
+
+import numpy as np
+
+IMPACT_KINDS = ("cid", "pid")  # the dampers with walls: the paper's two
+STARTS = ("centre", "left", "right")
+G_GRAV = 9.80665  # m/s^2, standard gravity; only friction needs a physical scale
+
+
+class ParameterError(ValueError):
+    """A parameter outside its allowed range; the message names the field."""
+
+
+def _check(name: str, value: float, lo: float, hi: float, *, lo_open=False, hi_open=False) -> float:
+    value = float(value)
+    below = value <= lo if lo_open else value < lo
+    above = value >= hi if hi_open else value > hi
+    if not math.isfinite(value) or below or above:
+        lb = "(" if lo_open else "["
+        rb = ")" if hi_open else "]"
+        raise ParameterError(f"{name} = {value!r} is out of range: allowed {lb}{lo}, {hi}{rb}")
+    return value
+
+
+def check_choice(name: str, value, allowed) -> None:
+    """Refuse a value that is not one of ``allowed``, naming the field and the choices."""
+    if value not in allowed:
+        raise ParameterError(f"{name} = {value!r} is not allowed: choose one of {', '.join(allowed)}")
+
+
+def check_fields(obj, **allowed: str) -> None:
+    """Check each named field of ``obj`` against its interval, written as the error message writes it."""
+    for name, interval in allowed.items():
+        lo, hi = (float(bound) for bound in interval[1:-1].split(","))
+        _check(name, getattr(obj, name), lo, hi, lo_open=interval[0] == "(", hi_open=interval[-1] == ")")
+
+
+def frequency_grid(r_min: float, r_max: float, r_step: float) -> np.ndarray:
+    """Inclusive grid r_min, r_min + step, ..., r_max, free of accumulated round-off."""
+    n = int(math.floor((r_max - r_min) / r_step + 1e-9)) + 1
+    return np.round(r_min + r_step * np.arange(n), 12)
+
+
+def a_max(beta: float, force_ratio: float) -> float:
+    """Resonant amplitude of the bare structure, (F0/K)/(2 beta); inf for beta = 0."""
+    return math.inf if beta == 0.0 else force_ratio / (2.0 * beta)
+
+
+def friction_acceleration(nu: float, frequency_hz: float, unit_m: float) -> float:
+    """Coulomb friction acceleration nu*g in model units (time 1/omega, length one unit).
+
+    model.md: a_f = nu * g_grav / (omega^2 * L_unit) with omega = 2*pi*frequency_hz.
+    """
+    omega = 2.0 * math.pi * frequency_hz
+    return nu * G_GRAV / (omega * omega * unit_m)
+
+
+@dataclass(frozen=True)
+class System:
+    """One impact-damper system (structure + damper), model units.
+
+    kind          'cid' (free mass, Masri's classical damper) or 'pid' (linearised pendulum)
+    mu            mass ratio m/M
+    beta          structural damping ratio
+    e             coefficient of restitution
+    gap           total clearance d (model units); the walls sit at y - x = +-d/2
+    rp            pendulum tuning ratio r' = omega_p/omega (PID only; 0 for the CID)
+    force_ratio   F0/K, the static deflection under the force amplitude
+    phase         force phase phi: F = F0 sin(Omega t + phi)
+    nu            Coulomb friction coefficient under the free mass (CID only)
+    frequency_hz  structure frequency, sets the friction scale only
+    unit_m        length of one model unit in metres, sets the friction scale only
+    """
+
+    kind: str
+    mu: float
+    beta: float
+    e: float
+    gap: float
+    _: KW_ONLY  # the optional parameters are named at every call
+    rp: float = 0.0
+    force_ratio: float = 0.096
+    phase: float = 0.0
+    nu: float = 0.0
+    frequency_hz: float = 1.5
+    unit_m: float = 0.01
+
+    def __post_init__(self):
+        check_choice("kind", self.kind, IMPACT_KINDS)
+        check_fields(self, mu="(0, 10]", beta="[0, 1)", e="[0, 1]", gap="[0, 1e12]", rp="[0, 1e4]",
+                     force_ratio="(0, 1e12]", phase=f"[{-2 * math.pi}, {2 * math.pi}]", nu="[0, 100]",
+                     frequency_hz="(0, 1e6]", unit_m="(0, 1e6]")
+        if self.kind == "pid" and self.rp == 0.0:
+            raise ParameterError("rp = 0.0 is out of range for kind 'pid': allowed (0, 10000]; a PID with r' = 0 is the CID")
+        if self.kind == "cid" and self.rp != 0.0:
+            raise ParameterError(f"rp = {self.rp!r} is not allowed for kind 'cid': the CID has no pendulum")
+        if self.kind == "pid" and self.nu != 0.0:
+            raise ParameterError("nu is only defined for kind 'cid' (the pendulum mass does not slide on a floor)")
+
+    @classmethod
+    def from_gap_ratio(cls, kind: str, mu: float, beta: float, e: float, gap_ratio: float, **kw) -> "System":
+        """Build a system with d = g * A_max (the paper's gap ratio g = d / A_max)."""
+        _check("gap_ratio", gap_ratio, 0.0, 1e6)
+        _check("beta", beta, 0.0, 1.0, lo_open=True, hi_open=True)
+        return cls(kind=kind, mu=mu, beta=beta, e=e, gap=gap_ratio * a_max(beta, kw.get("force_ratio", 0.096)), **kw)
+
+    @property
+    def a_max(self) -> float:
+        return a_max(self.beta, self.force_ratio)
+
+    @property
+    def gap_ratio(self) -> float:
+        return self.gap / self.a_max
+
+    @property
+    def friction_accel(self) -> float:
+        return friction_acceleration(self.nu, self.frequency_hz, self.unit_m)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class Protocol:
+    """The paper's response protocol (model.md, "Response protocol").
+
+    periods         natural periods simulated (2*pi each)
+    average_from    the amplitude window starts after this many periods
+    start           damper mass's initial place: 'centre', 'left' or 'right' wall
+    max_events_per_period   guard against impact accumulations: exceeding it
+                    ends the run with a flag instead of looping
+    """
+
+    periods: float = 500.0
+    average_from: float = 250.0
+    start: str = "centre"
+    max_events_per_period: int = 20000
+    extra: dict = field(default_factory=dict, compare=False, repr=False)
+
+    def __post_init__(self):
+        _check("periods", self.periods, 0.0, 1e7, lo_open=True)
+        _check("average_from", self.average_from, 0.0, self.periods, hi_open=True)
+        check_choice("start", self.start, STARTS)
+        if int(self.max_events_per_period) < 10:
+            raise ParameterError("max_events_per_period must be >= 10")
+
+    @property
+    def t_end(self) -> float:
+        return 2.0 * math.pi * self.periods
+
+    @property
+    def t_window(self) -> float:
+        return 2.0 * math.pi * self.average_from
+
+
+IPC_CLASSES = ("<1 IPC", "1 IPC", "2 IPC", ">2 IPC")
+
+
+def ipc_class(aipc: float) -> int:
+    """The paper's impacts-per-cycle class: 0 '<1', 1 '1 IPC', 2 '2 IPC', 3 '>2' (-1 if undefined)."""
+    if not math.isfinite(aipc):
+        return -1
+    if aipc < 0.5:
+        return 0
+    if aipc < 1.5:
+        return 1
+    if aipc <= 2.5:
+        return 2
+    return 3
+
+
+def _fmt(x: float) -> str:
+    return f"{x:g}"
+
+
+def curve_id(spec: dict) -> str:
+    """File-name id of a curve from its parameters, e.g. 'pid_mu0.01_e0.25_rp1'."""
+    name = f"{spec['damper']}_mu{_fmt(spec['mu'])}_e{_fmt(spec['e'])}"
+    if spec["damper"] == "pid":
+        name += f"_rp{_fmt(spec['rp'])}"
+    if spec.get("nu", 0.0):
+        name += f"_nu{_fmt(spec['nu'])}"
+        if "frequency_hz" in spec:
+            name += f"_f{_fmt(spec['frequency_hz'])}"
+        if "unit_m" in spec:
+            name += f"_L{_fmt(spec['unit_m'])}"
+    return name

@@ -1,0 +1,240 @@
+"""Scenes: a shear building, damper units on its floors, one load (what is simulated; the engine runs it).
+
+    building = Building.uniform(3, period_s=1.0, zeta=0.02)
+    damper = Damper("cid", mass=0.02 * building.total_mass, gap=0.05, e=0.5, units=4)
+    load = GroundMotion.from_record(load_record("elcentro"), pga_g=0.35)
+    result = simulate_scene(Scene(building, (damper,), load))
+    result.peak_roof_displacement, result.impacts, result.diagnostics
+
+Coordinates are relative to the ground.  A ground acceleration a_g(t) loads
+every mass m with -m a_g(t) (damper masses included); a force record loads the
+floors it names.  Both are piecewise linear between samples, so the flow
+between samples is exact.  After the last sample the load is zero and the
+motion decays freely until the scene's duration ends.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import KW_ONLY, dataclass
+
+import numpy as np
+
+from impact.model.building import Building
+from impact.model.params import G_GRAV, STARTS, ParameterError, _check, check_choice, check_fields
+
+DAMPER_KINDS = ("cid", "pid", "tmd")
+
+
+@dataclass(frozen=True)
+class Damper:
+    """One damper, possibly split into `units` identical units on the same floor.
+
+    kind     'cid' (free mass between walls), 'pid' (pendulum between walls), 'tmd' (spring and dashpot)
+    mass     total mass of the damper (all units together)
+    gap      total clearance d of each unit (CID, PID)
+    e        coefficient of restitution (CID, PID)
+    tuning   natural frequency of the pendulum (PID, r') or of the TMD (f) over the building's fundamental one
+    damping  damping ratio of the pendulum (PID, optional) or of the TMD
+    floor    floor it is attached to, 1 (lowest) to N; None: the roof
+    nu       Coulomb friction coefficient under a CID's mass
+    units    n identical units of mass mass/n (Bapat & Sankar's multi-unit damper)
+    """
+
+    kind: str
+    mass: float
+    _: KW_ONLY  # where, and how the damper is built, are named at every call
+    gap: float = 0.0
+    e: float = 0.0
+    tuning: float = 1.0
+    damping: float = 0.0
+    floor: int | None = None
+    nu: float = 0.0
+    units: int = 1
+
+    def __post_init__(self):
+        check_choice("kind", self.kind, DAMPER_KINDS)
+        tuning_floor = "[0" if self.kind == "cid" else "(0"
+        check_fields(self, mass="(0, 1e15]", gap="[0, 1e12]", e="[0, 1]", tuning=f"{tuning_floor}, 1e4]",
+                     damping="[0, 1)", nu="[0, 100]")
+        if int(self.units) != self.units or not 1 <= self.units <= 60:
+            raise ParameterError(f"units = {self.units!r} is out of range: allowed integers [1, 60]")
+        if self.nu > 0.0 and self.kind != "cid":
+            raise ParameterError("nu is only defined for kind 'cid' (only a free mass slides on a floor)")
+        if self.kind == "tmd" and self.gap:
+            raise ParameterError("gap is not defined for kind 'tmd' (a TMD has no walls): leave it at 0")
+
+    @property
+    def has_walls(self) -> bool:
+        return self.kind != "tmd"
+
+
+@dataclass(frozen=True, eq=False)
+class Harmonic:
+    """A force F0 sin(Omega t + phi) on one floor (None: the roof)."""
+
+    amplitude: float
+    omega: float
+    phase: float = 0.0
+    floor: int | None = None
+
+    def __post_init__(self):
+        _check("amplitude", self.amplitude, 0.0, 1e18, lo_open=True)
+        _check("omega", self.omega, 0.0, 1e6, lo_open=True)
+        _check("phase", self.phase, -2 * math.pi, 2 * math.pi)
+
+
+def _samples(name: str, values, dt: float) -> np.ndarray:
+    """A record's samples as a finite 1-d float array of at least two, with a valid step dt."""
+    a = np.asarray(values, dtype=float)
+    if a.ndim != 1 or len(a) < 2 or not np.all(np.isfinite(a)):
+        raise ParameterError(f"{name} must be a finite 1-d array of at least two samples")
+    _check("dt", dt, 0.0, 1e3, lo_open=True)
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class GroundMotion:
+    """A ground acceleration sampled every dt (m/s^2 in physical units), piecewise linear between samples."""
+
+    accel: np.ndarray
+    dt: float
+    name: str = "record"
+
+    def __post_init__(self):
+        object.__setattr__(self, "accel", _samples("accel", self.accel, self.dt))
+
+    @classmethod
+    def from_record(cls, record, pga_g: float | None = None, gravity: float = G_GRAV) -> "GroundMotion":
+        """From a :class:`impact.model.records.Record` (values in g), optionally scaled to a PGA in g."""
+        accel_g = record.accel_g if pga_g is None else record.scaled_to_pga(pga_g)
+        return cls(accel_g * gravity, record.dt, record.name)
+
+    @property
+    def duration(self) -> float:
+        return self.dt * (len(self.accel) - 1)
+
+    @property
+    def pga(self) -> float:
+        return float(np.max(np.abs(self.accel)))
+
+
+@dataclass(frozen=True, eq=False)
+class ForceRecord:
+    """Forces sampled every dt: F_i(t) = distribution[i] * values(t), piecewise linear.
+
+    distribution has one entry per floor, then optionally one per damper unit.
+    """
+
+    values: np.ndarray
+    dt: float
+    distribution: np.ndarray
+    name: str = "force"
+
+    def __post_init__(self):
+        object.__setattr__(self, "values", _samples("values", self.values, self.dt))
+        dist = np.atleast_1d(np.asarray(self.distribution, dtype=float))
+        if dist.ndim != 1 or not np.all(np.isfinite(dist)):
+            raise ParameterError("distribution must be a finite 1-d array: one weight per floor (and unit)")
+        object.__setattr__(self, "distribution", dist)
+
+    @property
+    def duration(self) -> float:
+        return self.dt * (len(self.values) - 1)
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """A building, its dampers, one load, and how long to run.
+
+    duration   simulated time; for a record, None means the record's length
+    window     the RMS window starts here (None: 0 for records, half the duration for a harmonic load)
+    start      where every wall damper's mass starts: centre, or resting on the left or right wall
+    gravity    acceleration of gravity in the scene's units (friction only)
+    unit_starts  each unit's initial displacement from the middle of its walls, in unit_list() order
+               (overrides start; a unit at +-d/2 rests on that wall; a TMD's entry must be 0)
+    """
+
+    building: Building
+    dampers: tuple = ()
+    load: object = None
+    duration: float | None = None
+    window: float | None = None
+    start: str = "centre"
+    gravity: float = G_GRAV
+    max_events_per_period: int = 20000
+    unit_starts: tuple | None = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "dampers", tuple(self.dampers))
+        if self.unit_starts is not None:
+            self._check_unit_starts()
+        check_choice("start", self.start, STARTS)
+        if self.load is None:
+            raise ParameterError("load is required: Harmonic, GroundMotion or ForceRecord")
+        n = self.building.storeys
+        for i, d in enumerate(self.dampers):
+            if d.floor is not None and not 1 <= d.floor <= n:
+                raise ParameterError(f"dampers[{i}].floor = {d.floor} is out of range: allowed [1, {n}]")
+        if isinstance(self.load, Harmonic) and self.load.floor is not None and not 1 <= self.load.floor <= n:
+            raise ParameterError(f"load.floor = {self.load.floor} is out of range: allowed [1, {n}]")
+        if self.duration is None and isinstance(self.load, Harmonic):
+            raise ParameterError("duration is required for a harmonic load")
+        if self.duration is not None:
+            _check("duration", self.duration, 0.0, 1e9, lo_open=True)
+        if self.window is not None:
+            _check("window", self.window, 0.0, self.t_end, hi_open=True)
+        _check("gravity", self.gravity, 0.0, 1e6, lo_open=True)
+        if int(self.max_events_per_period) < 10:
+            raise ParameterError(f"max_events_per_period = {self.max_events_per_period} is out of range: "
+                                 "allowed integers >= 10")
+        if len(self.unit_list()) > 60:
+            raise ParameterError("at most 60 damper units in one scene")
+
+    def _check_unit_starts(self) -> None:
+        starts = tuple(float(x) for x in self.unit_starts)
+        units = self.unit_list()
+        if len(starts) != len(units):
+            raise ParameterError(f"unit_starts has {len(starts)} values for {len(units)} damper units: give one per unit")
+        for k, (x, (_, d)) in enumerate(zip(starts, units)):
+            half = 0.5 * d.gap if d.kind != "tmd" else 0.0
+            _check(f"unit_starts[{k}]", x, -half, half)
+        object.__setattr__(self, "unit_starts", starts)
+
+    @property
+    def t_end(self) -> float:
+        return float(self.duration) if self.duration is not None else self.load.duration
+
+    @property
+    def t_window(self) -> float:
+        if self.window is not None:
+            return float(self.window)
+        return 0.5 * self.t_end if isinstance(self.load, Harmonic) else 0.0
+
+    def unit_list(self) -> list[tuple[int, Damper]]:
+        """(damper index, damper) for every unit."""
+        return [(i, d) for i, d in enumerate(self.dampers) for _ in range(int(d.units))]
+
+    def floor_index(self, floor: int | None) -> int:
+        return self.building.storeys - 1 if floor is None else int(floor) - 1
+
+
+def paper_scene(kind: str, mu: float, beta: float, e: float, gap: float, r: float, *, rp: float = 0.0,
+                force_ratio: float = 0.096, periods: float = 500.0, average_from: float = 250.0,
+                start: str = "centre", units: int = 1, nu: float = 0.0, gravity: float = G_GRAV,
+                phase: float = 0.0) -> Scene:
+    """The paper's one-storey structure in model units (M = 1, omega = 1) as a scene."""
+    building = Building.paper(beta)
+    damper = Damper(kind, mass=mu, gap=gap, e=e, tuning=rp if kind == "pid" else 0.0, nu=nu, units=units)
+    period = 2.0 * math.pi
+    return Scene(building, (damper,), Harmonic(force_ratio, r, phase), duration=periods * period,
+                 window=average_from * period, start=start, gravity=gravity)
+
+
+def paper_scene_from_system(system, r: float, protocol, units: int = 1) -> Scene:
+    """The scene of one run of the paper kernel (impact.model.params System and Protocol), optionally multi-unit."""
+    # friction's scale in model units is carried by the system; as the scene's gravity it is a_f / nu
+    gravity = system.friction_accel / system.nu if system.nu > 0 else G_GRAV
+    return paper_scene(system.kind, system.mu, system.beta, system.e, system.gap, r, rp=system.rp,
+                       force_ratio=system.force_ratio, periods=protocol.periods, average_from=protocol.average_from,
+                       start=protocol.start, units=units, nu=system.nu, gravity=gravity, phase=system.phase)

@@ -1,0 +1,266 @@
+"""The cross-validation stage's files: one function per step, each reading and writing files only.
+
+The workflow runs each step as its own rule (``workflow/rules/validation.smk``): one job per case
+of the grid (:func:`write_case`), then the grid's tables (:func:`write_grid_tables`), the drop
+tests, the data of Figs. 3 and 5, the claims and the figures.  :func:`run_validation` runs the
+same steps in one process, for a quick look outside the workflow.  Every file is written
+atomically, and every file the workflow keeps is one its rules declare.
+
+Nothing here is the paper's data: every record says ``synthetic: true``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Iterable
+
+import numpy as np
+
+from impact.outputs.files import write_text_atomic
+from impact.stages.validation.claims import evaluate_claims, jsonable
+from impact.stages.validation.comparison import (
+    CaseResult,
+    _map,
+    _run_case_worker,
+    ablation,
+    drop_tests,
+    fig3_data,
+    fig5_data,
+    run_case,
+)
+from impact.stages.validation.grid import Case, study_cases, validation_config
+from impact.stages.validation.measurements import Measurement, write_measurement
+from impact.stages.validation.plotting import plot_fig3, plot_fig5, plot_histories
+from impact.stages.validation.rig import adopt_calibrations, contact_calibrations
+
+# where each figure's records go, under the stage's records folder (one folder per panel)
+FIG3_RECORDS = ("fig3a", "fig3b_paper_grid", "fig3b_fine_grid")
+FIG5_RECORDS = ("fig5a_pid", "fig5a_bare", "fig5b")
+
+
+def write_csv(df, path) -> Path:
+    """Write a DataFrame as CSV atomically."""
+    path = Path(path)
+    write_text_atomic(path, df.to_csv(index=False))
+    return path
+
+
+def _write_json(path, obj) -> None:
+    # NaN stays NaN (Python's JSON reads it back): a missing number is not a null
+    write_text_atomic(Path(path), json.dumps(obj, indent=1, sort_keys=True, allow_nan=True) + "\n")
+
+
+def _plain(obj):
+    """Numbers and arrays as JSON values, NaN kept."""
+    return jsonable(obj, keep_nan=True)
+
+
+def _write_records(folder: Path, recs: Iterable[Measurement]) -> None:
+    for rec in recs:
+        h = rec.header
+        tag = f"r{h['r']:.4f}" if "r" in h else (f"x0_{h['x0_mm']:g}mm" if "x0_mm" in h else "drops")
+        src = "rig" if h.get("source", "").startswith("virtual rig") else "model"
+        write_measurement(Path(folder) / f"{src}_{h['kind']}_{tag}.csv", rec)
+
+
+# ----------------------------------------------------------------------------
+# the walls' contact laws, calibrated once for every job of the stage
+# ----------------------------------------------------------------------------
+
+
+def write_contact_laws(cfg: dict, path) -> list[dict]:
+    """Each wall's calibrated Hunt--Crossley damping chi (:func:`.rig.contact_calibrations`), as JSON."""
+    walls = contact_calibrations(cfg)
+    _write_json(path, {"walls": walls})
+    return walls
+
+
+def adopt_contact_laws(path) -> None:
+    """Take each wall's chi from :func:`write_contact_laws`' file rather than solving for it again."""
+    adopt_calibrations(json.loads(Path(path).read_text())["walls"])
+
+
+# ----------------------------------------------------------------------------
+# one case, and the grid's tables
+# ----------------------------------------------------------------------------
+
+
+def write_case(cfg: dict, case: Case, path) -> CaseResult:
+    """Model against rig for one case (:func:`.comparison.run_case`), as one JSON file."""
+    res = run_case(cfg, case)
+    _write_json(path, _plain({"row": res.row, "curve": res.curve, "delta": res.delta}))
+    return res
+
+
+def read_case(path) -> CaseResult:
+    data = json.loads(Path(path).read_text())
+    return CaseResult(data["row"], data["curve"], data["delta"])
+
+
+def grid_tables(results: Iterable[CaseResult]):
+    """The grid's three tables: one row per case, per case and r, per case and amplitude bin."""
+    import pandas as pd
+
+    results = list(results)
+    return (pd.DataFrame([r.row for r in results]), pd.DataFrame([row for r in results for row in r.curve]),
+            pd.DataFrame([row for r in results for row in r.delta]))
+
+
+def write_grid_tables(case_files, table, curves, delta) -> None:
+    for frame, path in zip(grid_tables(read_case(f) for f in case_files), (table, curves, delta)):
+        write_csv(frame, path)
+
+
+# ----------------------------------------------------------------------------
+# drop tests, and the data of Figs. 3 and 5
+# ----------------------------------------------------------------------------
+
+
+def write_drop_tests(cfg: dict, table, records) -> None:
+    recs, frame = drop_tests(cfg)
+    write_csv(frame, table)
+    for rec in recs:
+        write_measurement(Path(records) / f"rig_drop_{rec.header['wall']}_D{rec.header['ball_diameter_mm']:g}mm.csv", rec)
+
+
+def write_fig3_data(cfg: dict, data, decay, sweep, records: dict) -> dict:
+    """Fig. 3's data (JSON, for the plot and the claims), its two tables and its records.
+
+    records: a folder for each of FIG3_RECORDS.
+    """
+    import pandas as pd
+
+    f3 = fig3_data(cfg, keep_records=True)
+    write_csv(f3["decay"], decay)
+    rows = [{"grid": g, "r": r, "model_amp_mm": am, "rig_amp_mm": ar}
+            for g, sw in f3["sweeps"].items() for r, am, ar in zip(sw["r"], sw["model_amp_mm"], sw["rig_amp_mm"])]
+    write_csv(pd.DataFrame(rows), sweep)
+    for who in ("model", "rig"):
+        _write_records(records["fig3a"], f3["records"]["decay"][who])
+        for g in ("paper_grid", "fine_grid"):
+            _write_records(records[f"fig3b_{g}"], f3["records"]["sweep"][g][who])
+    saved = {k: v for k, v in f3.items() if k != "records"}
+    _write_json(data, _plain({**saved, "decay": saved["decay"].to_dict(orient="list")}))
+    return f3
+
+
+def read_fig3_data(path) -> dict:
+    import pandas as pd
+
+    data = json.loads(Path(path).read_text())
+    return {**data, "decay": pd.DataFrame(data["decay"])}
+
+
+def write_fig5_data(cfg: dict, data, decay, sweep, records: dict) -> dict:
+    """Fig. 5's data (JSON, for the plots and the claims), its two tables and its records.
+
+    records: a folder for each of FIG5_RECORDS.
+    """
+    f5 = fig5_data(cfg, keep_records=True)
+    write_csv(f5["a"]["data"], decay)
+    write_csv(f5["b"]["data"], sweep)
+    for who in ("model", "rig"):
+        for name in FIG5_RECORDS:
+            _write_records(records[name], f5["records"][name][who])
+    saved = {"a": {**f5["a"], "data": f5["a"]["data"].to_dict(orient="list")},
+             "b": {**f5["b"], "data": f5["b"]["data"].to_dict(orient="list")}}
+    _write_json(data, _plain(saved))
+    return f5
+
+
+def read_fig5_data(path) -> dict:
+    import pandas as pd
+
+    data = json.loads(Path(path).read_text())
+    b = data["b"]
+    return {"a": {**data["a"], "data": pd.DataFrame(data["a"]["data"])},
+            "b": {**b, "data": pd.DataFrame(b["data"]),
+                  "histories": {float(r): h for r, h in b["histories"].items()}}}
+
+
+# ----------------------------------------------------------------------------
+# claims and figures
+# ----------------------------------------------------------------------------
+
+
+def claims_of(cfg: dict, table, curves, fig3: dict | None, fig5: dict | None, drops, *, smoke: bool) -> dict:
+    """The claims (:func:`.claims.evaluate_claims`), the drop tests' check and what the run covered."""
+    claims = evaluate_claims(cfg, table, curves, fig3, fig5)
+    claims["drop_tests"] = {"max_abs_error_e": float(np.max(np.abs(drops.e_recovered - drops.e_calibrated))),
+                            "note": "Eq. (3b) with the header's mu on synthetic drops"}
+    seconds = float(table["time_case_s"].sum()) if len(table) else math.nan
+    claims["run"] = {"cases": int(len(table)), "case_seconds": seconds, "smoke": smoke, "synthetic": True,
+                     "source": "virtual rig vs Eq. (4) model; not the paper's data"}
+    return jsonable(claims)
+
+
+def write_claims(cfg: dict, table, curves, fig3, fig5, drops, out, *, smoke: bool) -> dict:
+    import pandas as pd
+
+    def read(path):
+        return pd.read_csv(path, float_precision="round_trip")  # every number as it was written
+
+    claims = claims_of(cfg, read(table), read(curves), read_fig3_data(fig3), read_fig5_data(fig5), read(drops),
+                       smoke=smoke)
+    write_text_atomic(Path(out), json.dumps(claims, indent=2, sort_keys=True) + "\n")
+    return claims
+
+
+def write_figures(fig3, fig5, fig3_paths, fig5_paths, histories_paths) -> None:
+    f5 = read_fig5_data(fig5)
+    plot_fig3(read_fig3_data(fig3), fig3_paths)
+    plot_fig5(f5, fig5_paths)
+    plot_histories(f5, histories_paths)
+
+
+# ----------------------------------------------------------------------------
+# the whole stage in one process
+# ----------------------------------------------------------------------------
+
+
+def run_validation(cfg: dict | None, out_dir, cases=None, *, smoke: bool = False, processes: int | None = None,
+                   figures: bool = True, write_all_records: bool = False, ablate: bool = False):
+    """The cross-validation stage in one process, into ``out_dir`` (the workflow runs it as rules).
+
+    Runs every case (default: the whole grid; ``smoke=True``: the smoke subset with its shortened
+    protocol; or the given ``cases``: Case objects, ids or dicts) in ``processes`` worker processes
+    and writes the files the workflow's rules write, under the same names:
+    ``validation_table.csv``, ``validation_curves.csv``, ``validation_delta.csv``,
+    ``drop_tests.csv`` (records under ``records/drop_tests``), ``claims.json`` and, with
+    ``figures``, ``fig3``/``fig5`` (PNG, PDF, data and records) and ``fig4_histories.png``;
+    with ``ablate``, ``ablation.csv``; with ``write_all_records``, every record of the grid under
+    ``records/grid/`` (about 1 GB for the full grid).  Returns the table (a DataFrame).
+    """
+    cfg = validation_config(cfg, smoke=smoke)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    cases = study_cases(cfg, smoke) if cases is None else [Case.of(c) for c in cases]
+    nproc = int(processes if processes is not None else cfg["processes"])
+    write_contact_laws(cfg, out / "contact_laws.json")  # solved here once; forked workers inherit it
+    results = _map(_run_case_worker, [(cfg, c, None) for c in cases], nproc)
+    table, curves, delta = grid_tables(results)
+    for frame, name in ((table, "validation_table"), (curves, "validation_curves"), (delta, "validation_delta")):
+        write_csv(frame, out / f"{name}.csv")
+    write_drop_tests(cfg, out / "drop_tests.csv", out / "records" / "drop_tests")
+    f3 = f5 = None
+    if figures:
+        folders = {name: out / "records" / name for name in FIG3_RECORDS + FIG5_RECORDS}
+        f3 = write_fig3_data(cfg, out / "fig3_data.json", out / "fig3a_decay.csv", out / "fig3b_sweep.csv", folders)
+        f5 = write_fig5_data(cfg, out / "fig5_data.json", out / "fig5a_decay.csv", out / "fig5b_sweep.csv", folders)
+        write_figures(out / "fig3_data.json", out / "fig5_data.json", [out / "fig3.png", out / "fig3.pdf"],
+                      [out / "fig5.png", out / "fig5.pdf"], [out / "fig4_histories.png"])
+    if write_all_records:
+        for c in cases:
+            res = run_case(cfg, c, keep_records=True)
+            for who in ("model", "rig"):
+                _write_records(out / "records" / "grid" / c.id, res.records["sweep"][who])
+                _write_records(out / "records" / "grid" / c.id, res.records["decay"][who])
+    if ablate:
+        write_csv(ablation(cfg, processes=nproc), out / "ablation.csv")
+    import pandas as pd
+
+    claims = claims_of(cfg, table, curves, f3, f5, pd.read_csv(out / "drop_tests.csv"), smoke=smoke)
+    write_text_atomic(out / "claims.json", json.dumps(claims, indent=2, sort_keys=True) + "\n")
+    return table

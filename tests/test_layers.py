@@ -1,0 +1,194 @@
+"""The house in layers: imports go down, the model compiles nothing, and every rule's library is derived.
+
+The layers (docs/architecture.md), lowest first: ``model`` (what is simulated), then ``engine`` (how),
+``closed_form`` and ``baselines`` (answers without the engine), then ``outputs`` (files, figures, report),
+then ``stages``, then the command line.  Each import statement of the package, those inside functions
+included, is checked against the table below, so a shortcut upwards fails here the day it is written.
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from impact.outputs import code_deps
+
+ROOT = Path(__file__).resolve().parents[1]
+SRC = ROOT / "src"
+PACKAGE = SRC / "impact"
+RULES = ROOT / "workflow" / "rules"
+SCRIPTS = ROOT / "workflow" / "scripts"
+
+# which top-level parts of the package each part may import (besides itself)
+MAY_IMPORT = {
+    "model": set(),
+    "engine": {"model"},
+    "closed_form": {"model"},
+    "baselines": {"model"},
+    "outputs": {"model"},
+    "stages": {"model", "engine", "closed_form", "baselines", "outputs"},
+    "cli": {"model", "engine", "closed_form", "baselines", "outputs", "stages"},
+    "__init__": set(),
+}
+# a script that two rules share, named after neither: the rules differ only in which figure's data they write
+SHARED_SCRIPTS = {"validation_fig3_data": "validation_figure_data", "validation_fig5_data": "validation_figure_data"}
+
+
+def _part(path: Path) -> str:
+    rel = path.relative_to(PACKAGE)
+    return rel.parts[0] if len(rel.parts) > 1 else rel.stem
+
+
+def _imports(path: Path):
+    """(line, imported module) of every import statement of a file, function-level ones included."""
+    package = ".".join(path.relative_to(SRC).with_suffix("").parts[:-1])
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield node.lineno, alias.name
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parts = package.split(".")
+                base = ".".join(parts[: len(parts) - node.level + 1] + ([base] if base else []))
+            yield node.lineno, base
+            for alias in node.names:
+                yield node.lineno, f"{base}.{alias.name}"
+
+
+def _library_modules():
+    return sorted(PACKAGE.rglob("*.py"))
+
+
+def test_every_part_of_the_package_is_in_the_layer_table():
+    assert {_part(p) for p in _library_modules()} <= set(MAY_IMPORT)
+
+
+@pytest.mark.parametrize("path", _library_modules(), ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_imports_go_down_the_layers(path):
+    own = _part(path)
+    allowed = MAY_IMPORT[own] | {own}
+    upward = []
+    for line, name in _imports(path):
+        if name.startswith("impact."):
+            target = name.split(".")[1]
+            if target in MAY_IMPORT and target not in allowed:
+                upward.append(f"line {line}: {name}")
+    assert not upward, f"{path.relative_to(ROOT)} ({own}) imports above its layer: {upward}"
+
+
+@pytest.mark.parametrize("path", sorted((PACKAGE / "model").rglob("*.py")), ids=lambda p: p.name)
+def test_the_model_never_imports_numba(path):
+    assert not [n for _, n in _imports(path) if n == "numba" or n.startswith("numba.")]
+
+
+def test_importing_the_model_loads_no_numba_and_the_engine_no_stage_or_output():
+    """At run time too: the whole model, then the whole engine, and what each has loaded."""
+    code = """
+import importlib, json, pkgutil, sys
+import impact.model, impact.engine
+def load(pkg):
+    for info in pkgutil.walk_packages(pkg.__path__, pkg.__name__ + "."):
+        importlib.import_module(info.name)
+load(impact.model)
+after_model = sorted(sys.modules)
+load(impact.engine)
+print(json.dumps({"model": after_model, "engine": sorted(sys.modules)}))
+"""
+    out = json.loads(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout)
+    assert not [m for m in out["model"] if m == "numba" or m.startswith("numba.")]
+    assert not [m for m in out["engine"] if m.startswith(("impact.stages", "impact.outputs", "impact.cli"))]
+
+
+def _rules():
+    """(rule, script, the rule's library argument) of every rule that runs a script."""
+    found = []
+    for smk in sorted(RULES.glob("*.smk")):
+        for block in re.split(r"(?m)^(?=rule )", smk.read_text())[1:]:
+            name = block.split()[1].rstrip(":")
+            script = re.search(r'script:\s+"\.\./scripts/(\w+)\.py"', block)
+            if script:
+                library = re.findall(r'library=library\("(\w+)"\)', block)
+                found.append((name, script.group(1), library))
+    return found
+
+
+def test_every_rule_runs_the_script_named_after_it_and_tracks_that_scripts_library():
+    rules = _rules()
+    assert len(rules) > 30
+    for name, script, library in rules:
+        assert script == SHARED_SCRIPTS.get(name, name), f"rule {name} runs scripts/{script}.py"
+        assert library == [script], f"rule {name}: its library param must be library({script!r}), not {library}"
+    # the hand-typed lists are gone
+    assert "LIB_" not in (RULES / "common.smk").read_text()
+
+
+def test_a_scripts_library_is_its_transitive_impact_imports():
+    """Against an independent reading: a breadth-first walk over this file's own import parser."""
+    for script in sorted(SCRIPTS.glob("*.py")):
+        expected, todo = set(), [script]
+        while todo:
+            path = todo.pop()
+            reader = _imports if path.is_relative_to(SRC) else _script_imports
+            for _, name in reader(path):
+                parts = name.split(".")
+                for i in range(1, len(parts) + 1):
+                    found = code_deps.module_file(".".join(parts[:i]), SRC)
+                    if found is not None and found not in expected:
+                        expected.add(found)
+                        todo.append(found)
+        data = {p for p in (PACKAGE / "stages" / "validation").glob("*.yaml")
+                if any(e.parent == p.parent for e in expected)}
+        assert set(code_deps.library_files(script, SRC)) == expected | data, script.name
+
+
+def _script_imports(path: Path):
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield node.lineno, alias.name
+        elif isinstance(node, ast.ImportFrom):
+            yield node.lineno, node.module
+            for alias in node.names:
+                yield node.lineno, f"{node.module}.{alias.name}"
+
+
+@pytest.mark.slow
+def test_what_a_script_loads_at_run_time_is_within_its_library():
+    """Executing a script's imports loads no impact module its library leaves out."""
+    code = """
+import ast, json, sys
+path = sys.argv[1]
+for node in ast.parse(open(path).read()).body:
+    if isinstance(node, (ast.Import, ast.ImportFrom)):
+        exec(compile(ast.Module([node], []), path, "exec"))
+print(json.dumps(sorted(m.__file__ for n, m in sys.modules.items() if n.startswith("impact") and m.__file__)))
+"""
+    for script in sorted(SCRIPTS.glob("*.py")):
+        proc = subprocess.run([sys.executable, "-c", code, str(script)], capture_output=True, text=True, check=True)
+        loaded = {Path(f).resolve() for f in json.loads(proc.stdout)}
+        library = set(code_deps.library_files(script))
+        assert loaded <= library, (script.name, sorted(map(str, loaded - library)))
+
+
+def test_a_content_edit_changes_the_digest_of_exactly_the_scripts_that_reach_it(tmp_path):
+    import shutil
+
+    copy = tmp_path / "src"
+    shutil.copytree(SRC / "impact", copy / "impact", ignore=shutil.ignore_patterns("__pycache__"))
+    before = {s.stem: code_deps.library_digest(s, copy) for s in SCRIPTS.glob("*.py")}
+    edited = copy / "impact" / "engine" / "contact.py"
+    edited.write_text(edited.read_text() + "\n# an edit\n")
+    code_deps._closure.cache_clear()
+    after = {s.stem: code_deps.library_digest(s, copy) for s in SCRIPTS.glob("*.py")}
+    reaches = {s.stem for s in SCRIPTS.glob("*.py") if edited.resolve() in code_deps.library_files(s, copy)}
+    assert {s for s in before if before[s] != after[s]} == reaches
+    assert {"sweep_curve", "design_sweep", "continuation_curve", "ensemble_curve", "masri_check",
+            "validation_case", "numerics_work_precision_piece", "loads_damper", "robustness_design"} <= reaches
+    assert not {"figure", "report", "tmd_optimum", "paper_vs_reproduced"} & reaches

@@ -1,6 +1,0 @@
-"""Glue: the run's datasets, figures, tables, report, config -> results/archive/impact-study-<commit>.tar.gz."""
-from impact.archive import snakemake_main
-from impact.pipeline import logged
-
-with logged(snakemake.log[0]):
-    snakemake_main(snakemake)
