@@ -37,8 +37,19 @@ def _package_of(path: Path, src: Path) -> str:
     return ".".join(parts[:-1])
 
 
-def _imported_names(path: Path, src: Path) -> set[str]:
+def _imported_names(path: Path, src: Path) -> frozenset[str]:
     """Every module an import statement of the file can load (``from a import b``: a, and a.b if b is one)."""
+    return _parsed_imports(path, src, _version(path))
+
+
+def _version(path: Path) -> tuple[int, int]:
+    """What a cached reading of a file is keyed by besides its path, so that an edit is read afresh."""
+    st = path.stat()
+    return st.st_mtime_ns, st.st_size
+
+
+@functools.cache  # every script's walk meets the same files: each is parsed once per process and version
+def _parsed_imports(path: Path, src: Path, version: tuple[int, int]) -> frozenset[str]:
     tree = ast.parse(path.read_text(), filename=str(path))
     package = _package_of(path, src)
     names: set[str] = set()
@@ -52,7 +63,7 @@ def _imported_names(path: Path, src: Path) -> set[str]:
                 base = ".".join(anchor + ([base] if base else []))
             names.add(base)
             names.update(f"{base}.{alias.name}" for alias in node.names)
-    return names
+    return frozenset(names)
 
 
 def _with_parents(name: str) -> list[str]:
@@ -69,7 +80,6 @@ def library_files(script: str | Path, src: str | Path = SRC) -> tuple[Path, ...]
     return _closure(Path(script).resolve(), Path(src).resolve())
 
 
-@functools.cache
 def _closure(script: Path, src: Path) -> tuple[Path, ...]:
     seen: set[Path] = set()
     todo = [script]
@@ -89,5 +99,10 @@ def library_digest(script: str | Path, src: str | Path = SRC) -> str:
     src = Path(src).resolve()
     digest = hashlib.sha256()
     for path in library_files(script, src):
-        digest.update(path.relative_to(src).as_posix().encode() + b"\0" + path.read_bytes())
+        digest.update(path.relative_to(src).as_posix().encode() + b"\0" + _file_digest(path, _version(path)))
     return digest.hexdigest()[:16]
+
+
+@functools.cache
+def _file_digest(path: Path, version: tuple[int, int]) -> bytes:
+    return hashlib.sha256(path.read_bytes()).digest()
