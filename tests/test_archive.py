@@ -257,7 +257,7 @@ def test_deterministic_under_source_date_epoch(tree, tmp_path, monkeypatch):
     assert cff["date-released"] == "2023-11-14"
 
 
-def test_snakemake_script_entry_archives_every_named_input_but_the_library(tree, monkeypatch):
+def test_snakemake_script_entry_archives_every_named_input(tree, monkeypatch):
     from types import SimpleNamespace
 
     class Named(dict):
@@ -271,7 +271,7 @@ def test_snakemake_script_entry_archives_every_named_input_but_the_library(tree,
     out = tree / "results" / "archive" / "x.tar.gz"
     smk = SimpleNamespace(
         input=Named(sweeps=["results/sweeps/cid_a.nc"], report="results/report/index.html",
-                    config=["config/smoke.yaml"], library=["src/impact/outputs/archive.py"]),
+                    config=["config/smoke.yaml"]),
         output=[str(out)], params=Named(), config=CONFIG)
     assert archive.snakemake_main(smk) == out
     manifest = json.loads(_member(out, "MANIFEST.json"))

@@ -381,8 +381,7 @@ def test_snakemake_script_entry_shows_the_registry_sections(results):
     entries = _entries(results)[:2]
     smk = SimpleNamespace(
         input=_Named(shown=[e["path"] for e in entries], overview=str(REPORT / "workflow.rst"), template=str(TEMPLATE),
-                     benchmarks=[str(results / "benchmarks" / "figure" / "fig08.tsv")],
-                     library=["src/impact/outputs/report.py"]),
+                     benchmarks=[str(results / "benchmarks" / "figure" / "fig08.tsv")]),
         output=[str(results / "report" / "index.html")],
         params=_Named(sections=entries), resources=_Named(executor="slurm"), config=CONFIG)
     page = report.snakemake_main(smk).read_text()

@@ -14,9 +14,9 @@ from impact.stages.validation import comparison as C
 from impact.stages.validation import grid as G
 from impact.stages.validation import paper_model as M
 from impact.stages.validation import rig as R
-from impact.stages.validation import steps as V
 from impact.stages.validation.analysis import sweep_curve
 from impact.stages.validation.measurements import load_measurements
+from impact.stages.validation.standalone import run_validation
 
 # a short protocol: the tests check the machinery, not the paper's numbers
 SHORT = {
@@ -112,7 +112,7 @@ def test_full_rig_case_errors_are_finite_and_moderate(cfg):
 
 
 def test_run_validation_smoke_writes_everything(cfg, tmp_path):
-    table = V.run_validation(SHORT, tmp_path, cases=[G.Case(0.0054, 20.0, 1.0, "steel")], processes=1)
+    table = run_validation(SHORT, tmp_path, cases=[G.Case(0.0054, 20.0, 1.0, "steel")], processes=1)
     assert len(table) == 1
     for name in ("validation_table.csv", "validation_curves.csv", "validation_delta.csv", "drop_tests.csv",
                  "claims.json", "fig3.png", "fig3.pdf", "fig5.png", "fig5.pdf", "fig4_histories.png",

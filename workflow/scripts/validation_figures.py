@@ -1,6 +1,6 @@
 """Glue: the data of Figs. 3 and 5 -> the figures (and Fig. 4's time histories)."""
 from impact.outputs.job_log import logged
-from impact.stages.validation.steps import write_figures
+from impact.stages.validation.figures import write_figures
 
 with logged(snakemake.log[0]):
     out = snakemake.output

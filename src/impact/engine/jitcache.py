@@ -20,6 +20,9 @@ import os
 from pathlib import Path
 
 CORE = Path(__file__).parent
+# the stamp of the engine's cache folder: both loops cache there, so they share one stamp (with one each, the
+# second loop to load after an edit would purge what the first had just compiled)
+ENGINE_CACHE = "impact-engine"
 
 
 @functools.cache  # three modules purge at import; the sources are read once per process

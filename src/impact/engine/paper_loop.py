@@ -38,7 +38,7 @@ from numba import njit
 
 from impact.engine.contact import slide_decision
 from impact.engine.events import first_exit
-from impact.engine.jitcache import purge_stale_cache
+from impact.engine.jitcache import ENGINE_CACHE, purge_stale_cache
 from impact.engine.segment import kappa_powers
 
 NT = 7  # coefficient slots, see module docstring
@@ -660,4 +660,4 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
     return encode_contact(mode, side, sigma)
 
 
-purge_stale_cache(run, "impact-kernels")
+purge_stale_cache(run, ENGINE_CACHE)

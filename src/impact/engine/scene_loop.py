@@ -19,7 +19,7 @@ from numba import njit
 
 from impact.engine.contact import floor_decision, floor_mass, floor_row, solve_impulses, stays, stuck_row
 from impact.engine.events import PEAK_RTOL, first_exit, peak_abs
-from impact.engine.jitcache import purge_stale_cache
+from impact.engine.jitcache import ENGINE_CACHE, purge_stale_cache
 from impact.engine.layout import (
     D_CAP,
     D_E0,
@@ -943,4 +943,4 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
     return irec
 
 
-purge_stale_cache(run_scene, "impact-core")
+purge_stale_cache(run_scene, ENGINE_CACHE)

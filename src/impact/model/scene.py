@@ -3,7 +3,7 @@
     building = Building.uniform(3, period_s=1.0, zeta=0.02)
     damper = Damper("cid", mass=0.02 * building.total_mass, gap=0.05, e=0.5, units=4)
     load = GroundMotion.from_record(load_record("elcentro"), pga_g=0.35)
-    result = simulate_scene(Scene(building, (damper,), load))
+    result = simulate_scene(Scene(building, (damper,), load))   # impact.engine.scenes
     result.peak_roof_displacement, result.impacts, result.diagnostics
 
 Coordinates are relative to the ground.  A ground acceleration a_g(t) loads

@@ -512,13 +512,11 @@ def archive_summary(path) -> dict:
 
 
 def snakemake_main(smk) -> Path:
-    """Body of the ``archive`` rule's script: every named input but ``library`` is archived,
-    by its path relative to the workflow's folder; params.citation (optional) sets CITATION.cff keys."""
+    """Body of the ``archive`` rule's script: every named input is archived, by its path relative to the
+    workflow's folder; params.citation (optional) sets CITATION.cff keys."""
     inp = smk.input
     include = []
     for key in inp.keys():
-        if key == "library":
-            continue
         value = getattr(inp, key)
         include.extend([value] if isinstance(value, str) else list(value))
     root = Path(getattr(smk.params, "root", ".") or ".")

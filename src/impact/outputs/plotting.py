@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from impact.model.params import curve_id  # noqa: E402
-from impact.outputs.files import atomic_path
+from impact.outputs.files import atomic_path  # noqa: E402
 from impact.outputs.labels import TOO_SLOW  # noqa: E402
 
 IPC_MARKERS = {0: ("o", "none", "<1 IPC"), 1: ("^", "none", "1 IPC"), 2: ("o", "full", "2 IPC"), 3: ("s", "none", ">2 IPC")}

@@ -4,7 +4,7 @@ A :class:`Design` is one damper on the paper's one-storey structure (model units
 structure's frequency is 1), at its design point: the CID and PID at their optimum gap ratio, the TMD at
 its equal-peak optimum.  Every measure is the paper's X_m, the largest protocol amplitude over a grid of
 forcing frequencies divided by the bare structure's resonant amplitude, taken under changed conditions on
-the exact scene core (:mod:`impact.model.scene`), or for the undamped CID and PID on the paper kernel through an
+the exact scene loop (:mod:`impact.engine.scenes`), or for the undamped CID and PID on the paper kernel through an
 exact similarity (:func:`paper_system`):
 
 * the force amplitude scaled by s with the physical gap left as designed (Table 1, row 9);

@@ -10,4 +10,6 @@
 - :mod:`.claims`        the paper's Sect. 3 claims as the two sources see them
 - :mod:`.plotting`      the stage's figures (the paper's Figs. 3 to 5)
 - :mod:`.steps`         the stage's steps as the workflow runs them, each reading and writing files
+- :mod:`.figures`       the step that draws the figures from their data files
+- :mod:`.standalone`    every step in one process, outside the workflow
 """

@@ -22,7 +22,7 @@ and both go through the *same* analysis code
 
 Per case: relative error of x_max, error of the resonance frequency, error of
 delta against amplitude (binned), impact counts and beating agreement
-(:func:`run_case`); over the grid a table (:mod:`.validation`), the paper's
+(:func:`run_case`); over the grid a table (:mod:`.steps`), the paper's
 claims as the rig and the model see them (:mod:`.claims`), the data of
 Figs. 3 and 5 (:func:`fig3_data`, :func:`fig5_data`) and their plots (:mod:`.plotting`).  The
 rig's fidelity features can be switched off one at a time

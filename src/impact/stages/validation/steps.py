@@ -2,8 +2,8 @@
 
 The workflow runs each step as its own rule (``workflow/rules/validation.smk``): one job per case
 of the grid (:func:`write_case`), then the grid's tables (:func:`write_grid_tables`), the drop
-tests, the data of Figs. 3 and 5, the claims and the figures.  :func:`run_validation` runs the
-same steps in one process, for a quick look outside the workflow.  Every file is written
+tests, the data of Figs. 3 and 5 and the claims; the figures are drawn by :mod:`.figures`, and
+:mod:`.standalone` runs every step in one process, for a quick look outside the workflow.  Every file is written
 atomically, and every file the workflow keeps is one its rules declare.
 
 Nothing here is the paper's data: every record says ``synthetic: true``.
@@ -22,17 +22,13 @@ from impact.outputs.files import write_text_atomic
 from impact.stages.validation.claims import evaluate_claims, jsonable
 from impact.stages.validation.comparison import (
     CaseResult,
-    _map,
-    _run_case_worker,
-    ablation,
     drop_tests,
     fig3_data,
     fig5_data,
     run_case,
 )
-from impact.stages.validation.grid import Case, study_cases, validation_config
+from impact.stages.validation.grid import Case
 from impact.stages.validation.measurements import Measurement, write_measurement
-from impact.stages.validation.plotting import plot_fig3, plot_fig5, plot_histories
 from impact.stages.validation.rig import adopt_calibrations, contact_calibrations
 
 # where each figure's records go, under the stage's records folder (one folder per panel)
@@ -206,61 +202,3 @@ def write_claims(cfg: dict, table, curves, fig3, fig5, drops, out, *, smoke: boo
                        smoke=smoke)
     write_text_atomic(Path(out), json.dumps(claims, indent=2, sort_keys=True) + "\n")
     return claims
-
-
-def write_figures(fig3, fig5, fig3_paths, fig5_paths, histories_paths) -> None:
-    f5 = read_fig5_data(fig5)
-    plot_fig3(read_fig3_data(fig3), fig3_paths)
-    plot_fig5(f5, fig5_paths)
-    plot_histories(f5, histories_paths)
-
-
-# ----------------------------------------------------------------------------
-# the whole stage in one process
-# ----------------------------------------------------------------------------
-
-
-def run_validation(cfg: dict | None, out_dir, cases=None, *, smoke: bool = False, processes: int | None = None,
-                   figures: bool = True, write_all_records: bool = False, ablate: bool = False):
-    """The cross-validation stage in one process, into ``out_dir`` (the workflow runs it as rules).
-
-    Runs every case (default: the whole grid; ``smoke=True``: the smoke subset with its shortened
-    protocol; or the given ``cases``: Case objects, ids or dicts) in ``processes`` worker processes
-    and writes the files the workflow's rules write, under the same names:
-    ``validation_table.csv``, ``validation_curves.csv``, ``validation_delta.csv``,
-    ``drop_tests.csv`` (records under ``records/drop_tests``), ``claims.json`` and, with
-    ``figures``, ``fig3``/``fig5`` (PNG, PDF, data and records) and ``fig4_histories.png``;
-    with ``ablate``, ``ablation.csv``; with ``write_all_records``, every record of the grid under
-    ``records/grid/`` (about 1 GB for the full grid).  Returns the table (a DataFrame).
-    """
-    cfg = validation_config(cfg, smoke=smoke)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    cases = study_cases(cfg, smoke) if cases is None else [Case.of(c) for c in cases]
-    nproc = int(processes if processes is not None else cfg["processes"])
-    write_contact_laws(cfg, out / "contact_laws.json")  # solved here once; forked workers inherit it
-    results = _map(_run_case_worker, [(cfg, c, None) for c in cases], nproc)
-    table, curves, delta = grid_tables(results)
-    for frame, name in ((table, "validation_table"), (curves, "validation_curves"), (delta, "validation_delta")):
-        write_csv(frame, out / f"{name}.csv")
-    write_drop_tests(cfg, out / "drop_tests.csv", out / "records" / "drop_tests")
-    f3 = f5 = None
-    if figures:
-        folders = {name: out / "records" / name for name in FIG3_RECORDS + FIG5_RECORDS}
-        f3 = write_fig3_data(cfg, out / "fig3_data.json", out / "fig3a_decay.csv", out / "fig3b_sweep.csv", folders)
-        f5 = write_fig5_data(cfg, out / "fig5_data.json", out / "fig5a_decay.csv", out / "fig5b_sweep.csv", folders)
-        write_figures(out / "fig3_data.json", out / "fig5_data.json", [out / "fig3.png", out / "fig3.pdf"],
-                      [out / "fig5.png", out / "fig5.pdf"], [out / "fig4_histories.png"])
-    if write_all_records:
-        for c in cases:
-            res = run_case(cfg, c, keep_records=True)
-            for who in ("model", "rig"):
-                _write_records(out / "records" / "grid" / c.id, res.records["sweep"][who])
-                _write_records(out / "records" / "grid" / c.id, res.records["decay"][who])
-    if ablate:
-        write_csv(ablation(cfg, processes=nproc), out / "ablation.csv")
-    import pandas as pd
-
-    claims = claims_of(cfg, table, curves, f3, f5, pd.read_csv(out / "drop_tests.csv"), smoke=smoke)
-    write_text_atomic(out / "claims.json", json.dumps(claims, indent=2, sort_keys=True) + "\n")
-    return table
