@@ -39,10 +39,10 @@ def best_time(fun, repeats: int) -> float:
 
 def roof_only(arrays: dict) -> dict:
     """The scene's arrays with every monitor but the roof's displacement (row 0) switched off."""
-    rows, kinds, rec, caps = arrays["monitors"]
-    off = caps.copy()
+    model = arrays["model"]
+    off = model.monitors.cap.copy()
     off[1:] = 0.0
-    return {**arrays, "monitors": (rows, kinds, rec, off)}
+    return {**arrays, "model": model._replace(monitors=model.monitors._replace(cap=off))}
 
 
 def loops(systems_and_r, repeats: int) -> dict:

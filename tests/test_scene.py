@@ -394,7 +394,7 @@ def test_a_scene_compiles_only_what_it_uses():
         "b = Building.uniform(2, 0.5, 0.02)\n"
         "simulate_scene(Scene(b, (Damper('cid', 1e3, gap=0.01, e=0.5),), GroundMotion(np.sin(np.arange(50)), 0.01)))\n"
         "sig = run_scene.signatures[0]\n"
-        "print(str(sig[3]), str(sig[4]), str(sig[6]), str(sig[7]).split('(')[0])\n"
+        "print(str(sig[1]), str(sig[2]), str(sig[3]), str(sig[4]).split('(')[0])\n"
     )
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stderr

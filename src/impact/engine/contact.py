@@ -32,8 +32,8 @@ _ZERO_TOL = 1e-10  # relative size below which a derivative counts as zero
 @njit(cache=True)
 def floor_mass(f, building, units, mode):
     """Mass that moves with floor f under an impulse: the floor and its locked units."""
-    m = building[0][f]
-    ufloor, um = units[1], units[2]
+    m = building.mass[f]
+    ufloor, um = units.floor, units.mass
     for j in range(um.shape[0]):
         if ufloor[j] == f and mode[j] == MODE_LOCKED:
             m += um[j]

@@ -31,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from impact.engine.bundles import ModalTables
 from impact.engine.layout import D_STUCKTIME, D_VISC, D_WORK, MODE_FREE, MODE_LOCKED, MON_ACCEL, NPOLY
 from impact.engine.segment import poly_bound, poly_integral
 
@@ -39,9 +40,9 @@ from impact.engine.segment import poly_bound, poly_integral
 def modal_tables(slots, nmax, nmon):
     """Empty per-slot tables for modal_slot (nmax: the largest reduced size; mkey -1: not filled)."""
     m2 = 2 * nmax
-    return (np.full(slots, -1, dtype=np.int64), np.zeros((slots, m2, m2), dtype=np.complex128),
-            np.zeros((slots, m2), dtype=np.complex128), np.zeros((slots, nmon, m2), dtype=np.complex128),
-            np.zeros((slots, nmon, m2)))
+    return ModalTables(np.full(slots, -1, dtype=np.int64), np.zeros((slots, m2, m2), dtype=np.complex128),
+                       np.zeros((slots, m2), dtype=np.complex128),
+                       np.zeros((slots, nmon, m2), dtype=np.complex128), np.zeros((slots, nmon, m2)))
 
 
 _PAIR_TOL = 1e-9  # two modes are a conjugate pair when they are conjugates to this fraction of |kap|
@@ -88,7 +89,7 @@ def halve(c, wt):
 @njit(cache=True)
 def _reduced_index(s, fidx, nf, units, mode, red):
     """red[i]: the reduced degree of freedom that carries full degree of freedom i (-1: a free CID unit)."""
-    ufloor = units[1]
+    ufloor = units.floor
     for i in range(red.shape[0]):
         red[i] = -1
     for r in range(fidx.shape[1]):
@@ -106,7 +107,7 @@ def modal_slot(s, key, cache, nf, units, mode, mon_rows, mon_kind, mtab):
     mkey, gvis, lmod, mvec, mbnd = mtab
     if mkey[s] == key:
         return
-    nr, lam, vec, cred, fidx, ellr = cache[1], cache[2], cache[3], cache[6], cache[7], cache[8]
+    nr, lam, vec, cred, fidx, ellr = cache.size, cache.lam, cache.vec, cache.damping, cache.dof, cache.load
     n = nr[s]
     red = np.empty(mon_rows.shape[1], dtype=np.int64)
     _reduced_index(s, fidx, nf, units, mode, red)
@@ -151,7 +152,7 @@ def amplitude_moduli(n, wc, aw):
 @njit(cache=True, inline='always')
 def monitor_row(s, m, n, wc, C, mon_rows, mon_kind, mon_rec, kap, P, r0, r1, harmonic, mtab, cm, pm):
     """Coefficient row of monitor m from the modal amplitudes wc[2n:4n] (the harmonic slots from C)."""
-    mvec = mtab[3]
+    mvec = mtab.mvec
     nt = kap.shape[0]
     for k in range(nt):
         cm[k] = 0.0
@@ -192,7 +193,7 @@ def end_values(ek, c, p, big_t):
 @njit(cache=True, inline='always')
 def curvature_bound(s, m, n, aw, wt, cm, pm, kpow, big_t, harmonic, mtab):
     """Bound on |h''| over [0, T] of monitor m's (halved) row: the tabulated modal part, then the rest."""
-    mbnd = mtab[4]
+    mbnd = mtab.mbnd
     acc = 0.0
     for k in range(2 * n):
         acc += wt[k] * mbnd[s, m, k] * aw[k]
@@ -232,8 +233,8 @@ def integrate_modal(s, n, work, cu1, wt, tau, units, mode, load_vec, record, r0,
     wt: the segment's mode weights (mode_weights), which halve the sums over k;
     pair, single: integral_tables over tau; pu: (2, NPOLY) scratch.
     """
-    gvis, lmod = mtab[1], mtab[2]
-    lam, vec, cred = cache[2], cache[3], cache[6]
+    gvis, lmod = mtab.gvis, mtab.lmod
+    lam, vec, cred = cache.lam, cache.vec, cache.damping
     wf, wc = work
     W = 2 * n
     U1 = 2 * n

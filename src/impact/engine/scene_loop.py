@@ -5,9 +5,12 @@ unit's next event (certified), integrates the energy terms and the monitors
 exactly over the segment, moves the state to the segment's end and resolves
 the events found there (all units whose event falls at that instant).
 
-Optional parts arrive as None and numba prunes them at compile time:
-`springs` (PID and TMD units), `fric` (Coulomb friction under CID units),
-`harm` (a harmonic load) and `record` (a piecewise-linear load record).
+Arrays travel in the named bundles of :mod:`impact.engine.bundles`, except
+into the steps inlined on every segment, which take the arrays they read (see
+that module on why).  Optional parts arrive as their own arguments, None when
+absent, and numba prunes them at compile time: `springs` (PID and TMD units),
+`fric` (Coulomb friction under CID units), `harm` (a harmonic load) and
+`record` (a piecewise-linear load record).
 """
 
 from __future__ import annotations
@@ -17,6 +20,17 @@ import math
 import numpy as np
 from numba import njit
 
+from impact.engine.bundles import (
+    Events,
+    InstantScratch,
+    Rows,
+    RunState,
+    Segment,
+    StepTables,
+    Tables,
+    Vectors,
+    Workspace,
+)
 from impact.engine.contact import floor_decision, floor_mass, floor_row, solve_impulses, stays, stuck_row
 from impact.engine.events import PEAK_RTOL, first_exit, peak_abs
 from impact.engine.jitcache import ENGINE_CACHE, purge_stale_cache
@@ -141,8 +155,8 @@ def _unit_level(j, units, springs, fric):
     """wp^2 d/2 - a_f: what the contact force must overcome to release a unit at its wall."""
     level = 0.0
     if springs is not None:
-        if units[0][j] == KIND_PID:
-            level += springs[0][j] / units[2][j] * 0.5 * units[4][j]
+        if units.kind[j] == KIND_PID:
+            level += springs.stiffness[j] / units.mass[j] * 0.5 * units.gap[j]
     if fric is not None:
         level -= fric[j]
     return level
@@ -211,7 +225,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
     ek = exp(kap ek_tau): when ek_tau is tau_max, a unit far from its walls is cleared without a search.
     The searched rows are weighted half rows (modal.halve): half the exponentials per evaluation.
     """
-    ukind, ufloor, um, uload, ud = units[0], units[1], units[2], units[3], units[4]
+    ukind, ufloor, um, uload, ud = units.kind, units.floor, units.mass, units.load, units.gap
     best = tau_max
     for j in range(um.shape[0]):
         ev_t[j] = np.inf
@@ -290,7 +304,7 @@ def integrate_segment(kap, C, P, tau, nf, building, units, springs, mode, load_v
     """Exact work of the load, viscous dissipation and stuck time over [0, tau] (tables: integral_tables)."""
     nt = kap.shape[0]
     nfull = C.shape[0]
-    cb = building[2]
+    cb = building.damping
     # velocity rows of every degree of freedom
     for i in range(nfull):
         derivative_row(kap, C[i], P[i], cv[i], pv[i])
@@ -333,8 +347,8 @@ def integrate_segment(kap, C, P, tau, nf, building, units, springs, mode, load_v
                     pu[0, k] += cab * pv[b, k]
         visc += int_prod(tau, pair, single, cv[a], pv[a], cu[0], pu[0])
     if springs is not None:
-        uc = springs[1]
-        ufloor = units[1]
+        uc = springs.damping
+        ufloor = units.floor
         for j in range(uc.shape[0]):
             if uc[j] != 0.0 and mode[j] == MODE_FREE:
                 f = ufloor[j]
@@ -397,7 +411,7 @@ def monitor_modal(s, n, wc, aw, kap, kpow, ek, C, P, tau, t, t_win, monitors, r0
     peak_abs's own first test would settle it.  A monitor whose peak has
     reached its cap (a stroke at its wall) is not searched again.
     """
-    mon_rows, mon_kind, mon_rec, mon_cap = monitors
+    mon_rows, mon_kind, mon_rec, mon_cap = monitors.rows, monitors.kind, monitors.record_coef, monitors.cap
     for m in range(mon_rows.shape[0]):
         if m != 0 and mon_peak[m] >= mon_cap[m]:
             continue
@@ -436,13 +450,16 @@ def window_square(kap, cm, pm, tau, t, t_win, pair, single, cs, ps, wt, mon_x2):
 
 
 @njit(cache=True)
-def impacts_on_floor(f, nf, building, units, mode, side, q, v, hit, ev_side, impulse_out, diag):
-    """Resolve the simultaneous impacts on floor f (units with hit[j]); returns how many.
+def impacts_on_floor(f, building, units, st, events, diag):
+    """Resolve the simultaneous impacts on floor f (units with events.hit[j]); returns how many.
 
     The contacts are the units hitting a wall of f and the units resting on
     one; consecutive identical contacts form one group (see solve_impulses).
     """
-    ufloor, um, ud, ue = units[1], units[2], units[4], units[5]
+    ufloor, um, ud, ue = units.floor, units.mass, units.gap, units.restitution
+    mode, side, q, v = st.mode, st.side, st.q, st.v
+    hit, ev_side, impulse_out = events.hit, events.side, events.impulse
+    nf = building.mass.shape[0]
     nu = um.shape[0]
     group = np.full(nu, -1, dtype=np.int64)
     u = np.empty(nu)
@@ -504,9 +521,10 @@ def impacts_on_floor(f, nf, building, units, mode, side, q, v, hit, ev_side, imp
 
 
 @njit(cache=True)
-def plastic_merge(j, nf, building, units, mode, side, q, v, diag):
+def plastic_merge(j, building, units, mode, v, diag):
     """End a rebound too slow to resolve: the unit and its floor take a common velocity."""
-    ufloor, um = units[1], units[2]
+    ufloor, um = units.floor, units.mass
+    nf = building.mass.shape[0]
     f = ufloor[j]
     mf = floor_mass(f, building, units, mode)
     for l in range(um.shape[0]):
@@ -523,15 +541,20 @@ def plastic_merge(j, nf, building, units, mode, side, q, v, diag):
 
 
 @njit(cache=True)
-def settle(t, p, nf, building, units, springs, fric, load_vec, harm, record, mode, side, sigma, offset, escape,
-           escape_v, check, q, v, cache, cursor, kap, C, P, cs, ps, cq, pq, work, diag):
+def settle(t, model, springs, fric, harm, record, st, scratch, diag):
     """Decide, at one instant, which units the walls or the floor keep holding.
 
-    check[j]: 1 a unit that just rebounded (is its rebound resolvable?), 2 a
+    st.check[j]: 1 a unit that just rebounded (is its rebound resolvable?), 2 a
     unit that just came to rest on a wall or on the floor (does it stay?).
     Repeats until no unit changes, since every change alters the floors' motion.
     """
-    ufloor, um, uload, ud = units[1], units[2], units[3], units[4]
+    p, building, units, load_vec = model.p, model.building, model.units, model.load_vec
+    mode, side, sigma, offset, escape, escape_v, check, q, v = (st.mode, st.side, st.sigma, st.offset, st.escape,
+                                                                st.escape_v, st.check, st.q, st.v)
+    kap, C, P, cs, ps, cq, pq = scratch.kap, scratch.C, scratch.P, scratch.cs, scratch.ps, scratch.cq, scratch.pq
+    work, cache, cursor = scratch.work, scratch.cache, scratch.cursor
+    ufloor, um, uload, ud = units.floor, units.mass, units.load, units.gap
+    nf = building.mass.shape[0]
     nu = um.shape[0]
     omega = p[P_OMEGA]
     r0 = 0.0
@@ -557,7 +580,7 @@ def settle(t, p, nf, building, units, springs, fric, load_vec, harm, record, mod
                 tol = _TOL * (bound(kap, cs, ps, 0, 0.0) + ud[j])
                 if push > 0.0 and rebound * rebound < 2.0 * tol * push:
                     # a rebound whose excursion v^2 / (2 a) cannot clear the contact tolerance
-                    plastic_merge(j, nf, building, units, mode, side, q, v, diag)
+                    plastic_merge(j, building, units, mode, v, diag)
                     mode[j] = MODE_STUCK
                     offset[j] = side[j] * 0.5 * ud[j]
                     check[j] = 2
@@ -590,8 +613,13 @@ def settle(t, p, nf, building, units, springs, fric, load_vec, harm, record, mod
 
 
 @njit(cache=True)
-def _record_impacts(t, nf, units, mode, side, hit, ev_side, v_before, v, impulse, recs, irec):
-    ufloor = units[1]
+def _record_impacts(t, units, st, events, v_before, recs, diag):
+    """Append a record (layout.R_*) of every unit that hit a wall at t while recs has room (count: diag[D_NREC])."""
+    ufloor = units.floor
+    mode, v = st.mode, st.v
+    hit, ev_side, impulse = events.hit, events.side, events.impulse
+    nf = v.shape[0] - ufloor.shape[0]
+    irec = int(diag[D_NREC])
     for j in range(hit.shape[0]):
         if hit[j] and irec < recs.shape[0]:
             f = ufloor[j]
@@ -605,14 +633,17 @@ def _record_impacts(t, nf, units, mode, side, hit, ev_side, v_before, v, impulse
             recs[irec, R_STUCK] = 1.0 if mode[j] == MODE_STUCK else 0.0
             recs[irec, R_IMPULSE] = impulse[j]
             irec += 1
-    return irec
+    diag[D_NREC] = irec
 
 
 @njit(cache=True)
-def resolve_events(t, tau_ev, nf, building, units, fric, mode, side, sigma, offset, escape, escape_v, check, q, v,
-                   ev_t, ev_side, ev_kind, vstick, hit, impulse, diag):
-    """Apply every unit's event that falls at this instant; returns the number of impacts."""
-    ufloor, um, ud = units[1], units[2], units[4]
+def resolve_events(tau_ev, building, units, fric, st, events, vstick, diag):
+    """Apply every unit's event that falls at this instant (tau_ev into the segment); returns the number of impacts."""
+    ufloor, um, ud = units.floor, units.mass, units.gap
+    mode, side, sigma, offset, escape, escape_v, check, q, v = (st.mode, st.side, st.sigma, st.offset, st.escape,
+                                                                st.escape_v, st.check, st.q, st.v)
+    ev_t, ev_side, ev_kind, hit, impulse = events
+    nf = building.mass.shape[0]
     nu = um.shape[0]
     limit = tau_ev * (1.0 + 16.0 * 2.220446049250313e-16) + 1e-300
     for j in range(nu):
@@ -654,11 +685,11 @@ def resolve_events(t, tau_ev, nf, building, units, fric, mode, side, sigma, offs
             else:
                 hit[j] = True
     n_hit = 0
-    floors_done = np.zeros(building[0].shape[0], dtype=np.bool_)
+    floors_done = np.zeros(nf, dtype=np.bool_)
     for j in range(nu):
         if hit[j] and not floors_done[ufloor[j]]:
             floors_done[ufloor[j]] = True
-            n_hit += impacts_on_floor(ufloor[j], nf, building, units, mode, side, q, v, hit, ev_side, impulse, diag)
+            n_hit += impacts_on_floor(ufloor[j], building, units, st, events, diag)
     for j in range(nu):
         f = ufloor[j]
         if hit[j]:
@@ -666,7 +697,7 @@ def resolve_events(t, tau_ev, nf, building, units, fric, mode, side, sigma, offs
             if fric is not None:
                 sigma[j] = -side[j]
             if abs(v[nf + j] - v[f]) < vstick:
-                plastic_merge(j, nf, building, units, mode, side, q, v, diag)
+                plastic_merge(j, building, units, mode, v, diag)
                 mode[j] = MODE_STUCK
                 offset[j] = side[j] * 0.5 * ud[j]
                 check[j] = 2
@@ -691,29 +722,30 @@ def resolve_events(t, tau_ev, nf, building, units, fric, mode, side, sigma, offs
 
 @njit(cache=True)
 def _workspace(nt, nfull, nu, nmax, slots, nmon):
-    """Every array a run works in, allocated once: (segment, scratch, events, tables)."""
-    seg = (np.zeros(nt, dtype=np.complex128), np.zeros((nfull, nt), dtype=np.complex128), np.zeros((nfull, NPOLY)),
-           np.zeros(nt, dtype=np.complex128), np.zeros((nt, nt), dtype=np.complex128),
-           np.zeros((nt, NPOLY), dtype=np.complex128), np.zeros((5, nt)))
-    rows = (np.zeros(nt, dtype=np.complex128), np.zeros(NPOLY), np.zeros(nt, dtype=np.complex128), np.zeros(NPOLY),
-            np.zeros(nt, dtype=np.complex128), np.zeros(NPOLY), np.zeros((nfull, nt), dtype=np.complex128),
-            np.zeros((nfull, NPOLY)), np.zeros((2, nt), dtype=np.complex128), np.zeros((2, NPOLY)))
-    vecs = (np.zeros((256, 4)), np.zeros(4), np.zeros(nfull), np.zeros(nfull), np.zeros(nfull), np.zeros(nmax),
-            np.zeros(2 * nmax), np.zeros(nu), np.ones(nt))
-    events = (np.zeros(nu), np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.bool_),
-              np.zeros(nu))
-    dtab = (np.full(slots, -1, dtype=np.int64), np.zeros((slots, nt), dtype=np.complex128),
-            np.zeros((slots, nt, nt), dtype=np.complex128), np.zeros((slots, nt, NPOLY), dtype=np.complex128))
-    tables = (modal_tables(slots, nmax, nmon), dtab, (np.zeros(7 * nmax), np.zeros(4 * nmax, dtype=np.complex128)),
-              np.zeros(1, dtype=np.int64))
-    return seg, rows, vecs, events, tables
+    """Every array a run works in, allocated once."""
+    seg = Segment(np.zeros(nt, dtype=np.complex128), np.zeros((nfull, nt), dtype=np.complex128),
+                  np.zeros((nfull, NPOLY)), np.zeros(nt, dtype=np.complex128), np.zeros((nt, nt), dtype=np.complex128),
+                  np.zeros((nt, NPOLY), dtype=np.complex128), np.zeros((5, nt)))
+    rows = Rows(np.zeros(nt, dtype=np.complex128), np.zeros(NPOLY), np.zeros(nt, dtype=np.complex128), np.zeros(NPOLY),
+                np.zeros(nt, dtype=np.complex128), np.zeros(NPOLY), np.zeros((nfull, nt), dtype=np.complex128),
+                np.zeros((nfull, NPOLY)), np.zeros((2, nt), dtype=np.complex128), np.zeros((2, NPOLY)))
+    vecs = Vectors(np.zeros((256, 4)), np.zeros(4), np.zeros(nfull), np.zeros(nfull), np.zeros(nfull), np.zeros(nmax),
+                   np.zeros(2 * nmax), np.zeros(nu), np.ones(nt))
+    events = Events(np.zeros(nu), np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64),
+                    np.zeros(nu, dtype=np.bool_), np.zeros(nu))
+    step = StepTables(np.full(slots, -1, dtype=np.int64), np.zeros((slots, nt), dtype=np.complex128),
+                      np.zeros((slots, nt, nt), dtype=np.complex128), np.zeros((slots, nt, NPOLY), dtype=np.complex128))
+    tables = Tables(modal_tables(slots, nmax, nmon), step, (np.zeros(7 * nmax), np.zeros(4 * nmax, dtype=np.complex128)),
+                    np.zeros(1, dtype=np.int64))
+    return Workspace(seg, rows, vecs, events, tables)
 
 
 @njit(cache=True)
-def _initial_units(nf, units, fric, q, v, ustate):
+def _initial_units(units, fric, st):
     """Contact state of every unit at the start: walls to check, friction's floor contact and slide sign."""
-    mode, side, sigma, offset, escape, escape_v, check = ustate
-    ufloor, ud = units[1], units[4]
+    mode, sigma, offset, check, q, v = st.mode, st.sigma, st.offset, st.check, st.q, st.v
+    ufloor, ud = units.floor, units.gap
+    nf = q.shape[0] - ufloor.shape[0]
     for j in range(mode.shape[0]):
         s_j = q[nf + j] - q[ufloor[j]]
         offset[j] = s_j
@@ -764,7 +796,7 @@ def integrate_energy(s, n, work, cu1, wt, tau, nf, building, units, springs, mod
 @njit(cache=True, inline='always')
 def move_to_end(nf, building, units, springs, fric, mode, sigma, kap, ek, C, P, tau, q, v, s_before, diag):
     """The state at the segment's end, the friction work on the way, and the largest stored energy."""
-    ufloor = units[1]
+    ufloor = units.floor
     if fric is not None:
         for j in range(mode.shape[0]):
             s_before[j] = q[nf + j] - q[ufloor[j]]
@@ -774,7 +806,7 @@ def move_to_end(nf, building, units, springs, fric, mode, sigma, kap, ek, C, P, 
             if mode[j] == MODE_FREE and fric[j] > 0.0:
                 # s' keeps its sign on a sliding segment: the work is exact
                 slid = q[nf + j] - q[ufloor[j]] - s_before[j]
-                diag[D_FRICTION] += units[2][j] * fric[j] * sigma[j] * slid
+                diag[D_FRICTION] += units.mass[j] * fric[j] * sigma[j] * slid
     e_now = energy(building, units, springs, nf, q, v)
     if e_now > diag[D_EMAX]:
         diag[D_EMAX] = e_now
@@ -792,86 +824,75 @@ def event_cap_reached(t, p, clock):
 
 
 @njit(cache=True)
-def handle_events(t, tau, p, nf, building, units, springs, fric, load_vec, harm, record, cache, ustate, q, v,
-                  seg, rows, vecs, events, tables, recs, irec, diag):
-    """Apply the events found at t, settle the contacts they leave and record the impacts; returns irec."""
-    mode, side, sigma, offset, escape, escape_v, check = ustate
-    kap, C, P = seg[0], seg[1], seg[2]
-    cs, ps, cq, pq = rows[0], rows[1], rows[2], rows[3]
-    v_before = vecs[4]
-    ev_t, ev_side, ev_kind, hit, impulse = events
-    work, cursor = tables[2], tables[3]
-    for i in range(q.shape[0]):
+def handle_events(t, tau, model, springs, fric, harm, record, st, scratch, out):
+    """Apply the events found at t, settle the contacts they leave and record the impacts."""
+    p, diag = model.p, out.diag
+    v, v_before = st.v, scratch.v_before
+    for i in range(v.shape[0]):
         v_before[i] = v[i]
-    n_hit = resolve_events(t, tau, nf, building, units, fric, mode, side, sigma, offset, escape, escape_v,
-                           check, q, v, ev_t, ev_side, ev_kind, p[P_VSTICK], hit, impulse, diag)
+    n_hit = resolve_events(tau, model.building, model.units, fric, st, scratch.events, p[P_VSTICK], diag)
     if n_hit > 0:
         diag[D_IMPACTS] += n_hit
         if t >= p[P_TWIN]:
             diag[D_IMPACTS_WIN] += n_hit
         if n_hit > 1:
             diag[D_SIMULTANEOUS] += 1.0
-    settle(t, p, nf, building, units, springs, fric, load_vec, harm, record, mode, side, sigma, offset,
-           escape, escape_v, check, q, v, cache, cursor, kap, C, P, cs, ps, cq, pq, work, diag)
+    settle(t, model, springs, fric, harm, record, st, scratch, diag)
     if n_hit > 0:
-        irec = _record_impacts(t, nf, units, mode, side, hit, ev_side, v_before, v, impulse, recs, irec)
-    return irec
+        _record_impacts(t, model.units, st, scratch.events, v_before, out.recs, diag)
 
 
 @njit(cache=True)
-def _start(t, p, nf, building, units, springs, fric, load_vec, harm, record, cache, ustate, q, v, seg, rows, tables,
-           mon_peak, mon_peak_t, mon_x2, diag):
+def _start(t, model, springs, fric, harm, record, st, scratch, out):
     """The state a run starts from: contacts decided by the walls, diagnostics and monitors zeroed."""
-    mode, side, sigma, offset, escape, escape_v, check = ustate
+    diag = out.diag
     for i in range(NDIAG):
         diag[i] = 0.0
-    _initial_units(nf, units, fric, q, v, ustate)
-    settle(t, p, nf, building, units, springs, fric, load_vec, harm, record, mode, side, sigma, offset, escape,
-           escape_v, check, q, v, cache, tables[3], seg[0], seg[1], seg[2], rows[0], rows[1], rows[2], rows[3],
-           tables[2], diag)
+    _initial_units(model.units, fric, st)
+    settle(t, model, springs, fric, harm, record, st, scratch, diag)
+    nf = model.building.mass.shape[0]
     diag[D_STICKS] = 0.0  # a unit placed on a wall is not a sticking episode
-    diag[D_E0] = energy(building, units, springs, nf, q, v)
+    diag[D_E0] = energy(model.building, model.units, springs, nf, st.q, st.v)
     diag[D_EMAX] = diag[D_E0]
-    for m in range(mon_peak.shape[0]):
-        mon_peak[m] = 0.0
-        mon_peak_t[m] = t
-        mon_x2[m] = 0.0
+    for m in range(out.peak.shape[0]):
+        out.peak[m] = 0.0
+        out.peak_t[m] = t
+        out.x2[m] = 0.0
 
 
 @njit(cache=True)
-def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitors, q0, v0, mode0, side0,
-              cache, recs, diag, q_out, v_out, mon_peak, mon_peak_t, mon_x2, ts, samples):
-    """One run from p[P_T0] to p[P_TEND]; returns the number of impact records written.
+def run_scene(model, springs, fric, harm, record, start, cache, out):
+    """One run from p[P_T0] to p[P_TEND], its results written into out (bundles.RunOutputs); returns the number
+    of impact records written.
 
-    building = (floor masses, storey stiffness matrix, damping matrix);
-    units = (kind, floor, mass, load per unit mass, gap, restitution);
-    monitors = (rows over the degrees of freedom, kind, record coefficient, cap of the peak);
-    mode0/side0: every unit's initial contact state; the walls decide at once
-    whether they hold a unit placed against them.
+    model: bundles.SceneArrays; start: bundles.StartState, with every unit's initial contact state (the
+    walls decide at once whether they hold a unit placed against them); cache: a bundles.ConfigCache
+    that the run fills.
     """
-    nf = building[0].shape[0]
-    nu = units[2].shape[0]
-    nt = cache[2].shape[1] + (2 if harm is not None else 0)
-    seg, rows, vecs, events, tables = _workspace(nt, nf + nu, nu, cache[5].shape[1], cache[0].shape[0],
-                                                 monitors[0].shape[0])
-    kap, C, P, ek, pair, single, kpow = seg
-    cs, ps, cq, pq, cm, pm, cv, pv, cu, pu = rows
-    stack, out, qs, vs, _, cu1, aw, s_before, wt = vecs
-    ev_t, ev_side, ev_kind = events[0], events[1], events[2]
-    mtab, dtab, work, cursor = tables
-    ustate = (mode0.copy(), side0.copy(), np.zeros(nu, dtype=np.int64), np.zeros(nu), np.zeros(nu, dtype=np.int64),
-              np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64))
-    mode, side, sigma, offset, escape, escape_v, check = ustate
-    q = q0.copy()
-    v = v0.copy()
+    p, building, units, load_vec, monitors = model
+    nf = building.mass.shape[0]
+    nu = units.mass.shape[0]
+    nt = cache.lam.shape[1] + (2 if harm is not None else 0)
+    ws = _workspace(nt, nf + nu, nu, cache.kinv.shape[1], cache.key.shape[0], monitors.rows.shape[0])
+    st = RunState(start.mode.copy(), start.side.copy(), np.zeros(nu, dtype=np.int64), np.zeros(nu),
+                  np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64),
+                  start.q.copy(), start.v.copy())
+    # the steps inlined on every segment take arrays, not bundles (see impact.engine.bundles)
+    kap, C, P, ek, pair, single, kpow = ws.seg
+    cs, ps, cq, pq, cm, pm, cv, pv, cu, pu = ws.rows
+    stack, found, qs, vs, _, cu1, aw, s_before, wt = ws.vecs
+    ev_t, ev_side, ev_kind = ws.events.t, ws.events.side, ws.events.kind
+    mtab, dtab, work, cursor = ws.tables
+    mode, side, sigma, offset, escape, escape_v = st.mode, st.side, st.sigma, st.offset, st.escape, st.escape_v
+    q, v = st.q, st.v
+    diag, mon_peak, mon_peak_t, mon_x2, ts, samples = out.diag, out.peak, out.peak_t, out.x2, out.ts, out.samples
+    instant = InstantScratch(kap, C, P, cs, ps, cq, pq, work, cache, cursor, ws.events, ws.vecs.v_before)
     t = p[P_T0]
     t_end = p[P_TEND]
-    _start(t, p, nf, building, units, springs, fric, load_vec, harm, record, cache, ustate, q, v, seg, rows, tables,
-           mon_peak, mon_peak_t, mon_x2, diag)
+    _start(t, model, springs, fric, harm, record, st, instant, out)
     its = 0  # the next sample time
     while its < ts.shape[0] and ts[its] < t:
         its += 1
-    irec = 0
     clock = np.array([math.floor(t / p[P_PERIOD]), 0.0])
     # what the slot, |kap|^n and the integral tables were last found for: scalars, not an array, so that
     # they stay in registers (an inlined helper returning them cost 15 % of a run)
@@ -887,7 +908,7 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
         if key != slot_key:
             s = config_slot(building, units, springs, load_vec, omega if harm is not None else 0.0, mode, cache,
                             cursor)
-            modal_slot(s, key, cache, nf, units, mode, monitors[0], monitors[1], mtab)
+            modal_slot(s, key, cache, nf, units, mode, monitors.rows, monitors.kind, mtab)
             slot_key = key
         build_segment(s, cache, units, springs, fric, mode, offset, sigma, nf, q, v, r0, r1, harm is not None, theta0,
                       omega, kap, C, P, work)
@@ -902,11 +923,11 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
             tab_tau = tau_max
         diag[D_SEGMENTS] += 1.0
         best = search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape, escape_v, tau_max,
-                             r0, r1, ev_t, ev_side, ev_kind, cs, ps, cq, pq, out, kpow, ek,
+                             r0, r1, ev_t, ev_side, ev_kind, cs, ps, cq, pq, found, kpow, ek,
                              tab_tau if key == tab_key else -1.0, wt, diag)
         event = best <= tau_max and best < np.inf
         tau = best if event else tau_max
-        n = cache[1][s]
+        n = cache.size[s]
         wc = work[1]  # the segment's modal amplitudes are wc[2n:4n] (build_segment)
         amplitude_moduli(n, wc, aw)
         if key != tab_key or tau != tab_tau:
@@ -929,18 +950,16 @@ def run_scene(p, building, units, springs, fric, load_vec, harm, record, monitor
         if event_cap_reached(t, p, clock):
             diag[D_CAP] = 1.0
             break
-        irec = handle_events(t, tau, p, nf, building, units, springs, fric, load_vec, harm, record, cache, ustate, q,
-                             v, seg, rows, vecs, events, tables, recs, irec, diag)
+        handle_events(t, tau, model, springs, fric, harm, record, st, instant, out)
         slot_key = -1  # settle may have filled (and so replaced) cache slots
         tab_key = -1
         kpow_key = -1
     diag[D_E1] = energy(building, units, springs, nf, q, v)
-    diag[D_NREC] = irec
     diag[D_TEND] = t
     for i in range(nf + nu):
-        q_out[i] = q[i]
-        v_out[i] = v[i]
-    return irec
+        out.q[i] = q[i]
+        out.v[i] = v[i]
+    return int(diag[D_NREC])
 
 
 purge_stale_cache(run_scene, ENGINE_CACHE)

@@ -15,6 +15,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from impact.engine import layout as L
+from impact.engine.bundles import (
+    BuildingArrays,
+    ConfigCache,
+    MonitorArrays,
+    RunOutputs,
+    SceneArrays,
+    SpringArrays,
+    StartState,
+    UnitArrays,
+)
 from impact.engine.contact import STICK_VELOCITY
 from impact.engine.diagnostics import read_diagnostics
 from impact.engine.jitcache import compile_lock
@@ -150,13 +160,14 @@ def _initial_state(scene: Scene, floor: np.ndarray, gap: np.ndarray, kind: np.nd
     return q, np.zeros(nfull), mode, side
 
 
-def _cache(nmax: int):
-    s = CACHE_SLOTS
-    return (np.full(s, -1, dtype=np.int64), np.zeros(s, dtype=np.int64),
-            np.zeros((s, 2 * nmax), dtype=np.complex128), np.zeros((s, 2 * nmax, 2 * nmax), dtype=np.complex128),
-            np.zeros((s, 2 * nmax, 2 * nmax), dtype=np.complex128), np.zeros((s, nmax, nmax)),
-            np.zeros((s, nmax, nmax)), np.zeros((s, nmax), dtype=np.int64), np.zeros((s, nmax)),
-            np.zeros((s, 2 * nmax), dtype=np.complex128))
+def _cache(nmax: int) -> ConfigCache:
+    """An empty cache of CACHE_SLOTS configurations (key -1: not filled); nmax: the largest reduced size."""
+    s, m2 = CACHE_SLOTS, 2 * nmax
+    return ConfigCache(np.full(s, -1, dtype=np.int64), np.zeros(s, dtype=np.int64),
+                       np.zeros((s, m2), dtype=np.complex128), np.zeros((s, m2, m2), dtype=np.complex128),
+                       np.zeros((s, m2, m2), dtype=np.complex128), np.zeros((s, nmax, nmax)),
+                       np.zeros((s, nmax, nmax)), np.zeros((s, nmax), dtype=np.int64), np.zeros((s, nmax)),
+                       np.zeros((s, m2), dtype=np.complex128))
 
 
 def _scene_arrays(scene: Scene):
@@ -169,12 +180,12 @@ def _scene_arrays(scene: Scene):
     uload = load_vec[nf:] / mass if len(mass) else np.zeros(0)
     if harm is not None and np.any(uload != 0.0):
         raise ParameterError("a harmonic load acts on a floor, not on a damper unit")
-    building = (b.masses.copy(), b.stiffness, b.damping.copy())
-    units = (kind, floor, mass, uload, gap, e)
-    springs = (k, c) if np.any(kind != L.KIND_CID) else None
+    building = BuildingArrays(b.masses.copy(), b.stiffness, b.damping.copy())
+    units = UnitArrays(kind, floor, mass, uload, gap, e)
+    springs = SpringArrays(k, c) if np.any(kind != L.KIND_CID) else None
     fric = a_f if np.any(a_f > 0.0) else None
     rows, kinds, caps = _monitors(scene, nf + len(mass))
-    monitors = (rows, kinds, np.where(kinds == L.MON_ACCEL, mon_rec, 0.0), caps)
+    monitors = MonitorArrays(rows, kinds, np.where(kinds == L.MON_ACCEL, mon_rec, 0.0), caps)
     n_spring = int(np.sum(kind != L.KIND_CID)) if springs is not None else 0
     p = np.zeros(L.NPAR)
     p[L.P_T0] = 0.0
@@ -193,25 +204,22 @@ def _scene_arrays(scene: Scene):
     p[L.P_REC_T0] = 0.0
     p[L.P_REC_DT] = rec_dt
     q0, v0, mode0, side0 = _initial_state(scene, floor, gap, kind, nf + len(mass))
-    return dict(p=p, building=building, units=units, springs=springs, fric=fric, load_vec=load_vec, harm=harm,
-                record=record, monitors=monitors, q0=q0, v0=v0, mode0=mode0, side0=side0,
-                cache=_cache(nf + n_spring))
+    return dict(model=SceneArrays(p, building, units, load_vec, monitors), springs=springs, fric=fric, harm=harm,
+                record=record, start=StartState(q0, v0, mode0, side0), cache=_cache(nf + n_spring))
 
 
 def run_arrays(arrays: dict, record: int = 0, times=None):
     """Run the kernel on prepared arrays; returns the raw outputs (for benchmarks and tests)."""
-    nfull = len(arrays["q0"])
-    nmon = len(arrays["monitors"][1])
+    nfull = len(arrays["start"].q)
+    nmon = len(arrays["model"].monitors.kind)
     ts = np.asarray(times, dtype=float) if times is not None else np.zeros(0)
-    out = dict(recs=np.zeros((int(record), L.NREC)), diag=np.zeros(L.NDIAG), q=np.zeros(nfull), v=np.zeros(nfull),
-               peak=np.zeros(nmon), peak_t=np.zeros(nmon), x2=np.zeros(nmon), ts=ts,
-               samples=np.zeros((len(ts), 2 * nfull)))
+    out = RunOutputs(recs=np.zeros((int(record), L.NREC)), diag=np.zeros(L.NDIAG), q=np.zeros(nfull),
+                     v=np.zeros(nfull), peak=np.zeros(nmon), peak_t=np.zeros(nmon), x2=np.zeros(nmon), ts=ts,
+                     samples=np.zeros((len(ts), 2 * nfull)))
     a = arrays
-    cache = tuple(c.copy() for c in a["cache"])
-    run_scene(a["p"], a["building"], a["units"], a["springs"], a["fric"], a["load_vec"], a["harm"], a["record"],
-              a["monitors"], a["q0"], a["v0"], a["mode0"], a["side0"], cache, out["recs"], out["diag"], out["q"],
-              out["v"], out["peak"], out["peak_t"], out["x2"], ts, out["samples"])
-    return out
+    cache = ConfigCache(*(c.copy() for c in a["cache"]))
+    run_scene(a["model"], a["springs"], a["fric"], a["harm"], a["record"], a["start"], cache, out)
+    return out._asdict()
 
 
 def simulate_scene(scene: Scene, *, record: int = 0, times=None) -> SceneResult:

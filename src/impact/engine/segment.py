@@ -196,7 +196,7 @@ def config_key(mode):
 def _assemble(building, units, springs, load_vec, mode, cache, s):
     """Reduced M, K, C and the reduced load of one configuration, into slot s."""
     mb, kb, cb = building
-    ukind, ufloor, um = units[0], units[1], units[2]
+    ukind, ufloor, um = units.kind, units.floor, units.mass
     keys, nr, lam, vec, vinv, kinv, cred, fidx, ellr, zc = cache
     nf = mb.shape[0]
     nu = um.shape[0]
@@ -276,7 +276,7 @@ def config_slot(building, units, springs, load_vec, omega, mode, cache, cursor):
     the complex amplitude zc of the particular solution per unit load.
     cursor: one-element array, the slot to replace next.
     """
-    keys = cache[0]
+    keys = cache.key
     key = config_key(mode)
     for s in range(keys.shape[0]):
         if keys[s] == key:
@@ -284,12 +284,12 @@ def config_slot(building, units, springs, load_vec, omega, mode, cache, cursor):
     s = cursor[0]
     cursor[0] = (s + 1) % keys.shape[0]
     a_mat, m, lr, n = _assemble(building, units, springs, load_vec, mode, cache, s)
-    zc = cache[9]
+    zc = cache.forced
     zc[s, :] = 0.0
     if omega > 0.0:
         # particular solution mode by mode: a mode the load does not reach (the opposite swing of
         # identical undamped pendulums, say) has no part in it even when it sits at the load's frequency
-        vec, vinv = cache[3], cache[4]
+        vec, vinv = cache.vec, cache.vinv
         rhs = np.zeros(2 * n, dtype=np.complex128)
         for i in range(n):
             rhs[n + i] = lr[i] / m[i]
@@ -303,8 +303,8 @@ def config_slot(building, units, springs, load_vec, omega, mode, cache, cursor):
             if abs(modal[k]) <= 1e-13 * size:
                 modal[k] = 0.0
             else:
-                gap = 1j * omega - cache[2][s, k]
-                if abs(gap) <= 1e-12 * abs(cache[2][s, k]):
+                gap = 1j * omega - cache.lam[s, k]
+                if abs(gap) <= 1e-12 * abs(cache.lam[s, k]):
                     raise ValueError("the harmonic load drives an undamped mode at its natural frequency: "
                                      "the forced response is unbounded (add damping or change the frequency)")
                 modal[k] = modal[k] / gap
@@ -333,7 +333,7 @@ def build_segment(s, cache, units, springs, fric, mode, offset, sigma, nf, q, v,
     solution's velocity in floats[2n:3n] (the modal shortcuts read them).
     """
     keys, nr, lam, vec, vinv, kinv, cred, fidx, ellr, zc = cache
-    ufloor, um, uload = units[1], units[2], units[3]
+    ufloor, um, uload = units.floor, units.mass, units.load
     n = nr[s]
     nt = kap.shape[0]
     for k in range(nt):
@@ -406,7 +406,7 @@ def build_segment(s, cache, units, springs, fric, mode, offset, sigma, nf, q, v,
             for k in range(NPOLY):
                 P[row, k] = P[f, k]
             P[row, 0] += offset[j]
-        elif units[0][j] == KIND_CID:
+        elif units.kind[j] == KIND_CID:
             for k in range(nt):
                 C[row, k] = 0.0
             a0 = uload[j] * r0
@@ -427,7 +427,7 @@ def same_unit(units, springs, i, j):
             or gap[i] != gap[j] or rest[i] != rest[j]:
         return False
     if springs is not None:
-        if springs[0][i] != springs[0][j] or springs[1][i] != springs[1][j]:
+        if springs.stiffness[i] != springs.stiffness[j] or springs.damping[i] != springs.damping[j]:
             return False
     return True
 
@@ -441,7 +441,7 @@ def _copy_identical_rows(units, springs, mode, nf, q, v, C, P):
     would split a multi-unit damper's simultaneous impacts into a cascade.
     By the permutation symmetry the exact rows are equal; copying keeps them so.
     """
-    kind = units[0]
+    kind = units.kind
     for j in range(1, kind.shape[0]):
         i = j - 1
         if kind[j] == KIND_CID or mode[j] != MODE_FREE or mode[i] != MODE_FREE:
@@ -555,7 +555,7 @@ def poly_integral(pa, pb, big_t):
 def energy(building, units, springs, nf, q, v):
     """Kinetic plus elastic energy of the scene (relative coordinates)."""
     mb, kb, _ = building
-    ufloor, um = units[1], units[2]
+    ufloor, um = units.floor, units.mass
     e = 0.0
     for a in range(nf):
         e += 0.5 * mb[a] * v[a] * v[a]
@@ -564,7 +564,7 @@ def energy(building, units, springs, nf, q, v):
     for j in range(um.shape[0]):
         e += 0.5 * um[j] * v[nf + j] * v[nf + j]
     if springs is not None:
-        uk = springs[0]
+        uk = springs.stiffness
         for j in range(um.shape[0]):
             if uk[j] != 0.0:
                 s = q[nf + j] - q[ufloor[j]]

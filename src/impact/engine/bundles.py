@@ -1,0 +1,88 @@
+"""The named bundles in which the scene loop passes its arrays.
+
+numba compiles a namedtuple into a struct, and a compiled function takes a few
+bundles instead of dozens of positional arrays.  The steps the loop runs on every
+segment (segment.build_segment, scene_loop.search_events, monitor_modal,
+integrate_segment, modal.integrate_modal, ...) are inlined, and there each array
+in a call's arguments costs a reference count, a bundle as many as it holds:
+they take the arrays they read, which run_scene unpacks once per run.  Bundling
+their arguments cost 8 to 31 % of a run on benchmarks/bench_scene.py's cases.
+
+The optional parts of a scene (`springs`: PID and TMD units, `fric`: Coulomb
+friction, `harm`: a harmonic load, `record`: a load record) are not in a
+bundle: each travels as its own argument, None when the scene lacks it.
+numba prunes a branch on `arg is None` only for a function's own argument, and
+that pruning is what makes a scene compile only the code it uses.
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+#: the storeys: floor masses, storey stiffness and damping matrices
+BuildingArrays = namedtuple("BuildingArrays", "mass stiffness damping")
+
+#: one entry per damper unit: kind (layout.KIND_*), floor index, mass, load per unit mass, gap, restitution
+UnitArrays = namedtuple("UnitArrays", "kind floor mass load gap restitution")
+
+#: the units' spring stiffness and dashpot (zero for a CID unit); absent when every unit is a CID
+SpringArrays = namedtuple("SpringArrays", "stiffness damping")
+
+#: what the run certifies peaks of: rows over the degrees of freedom, kind (layout.MON_*),
+#: the record's coefficient (an absolute acceleration) and a cap the peak cannot pass
+MonitorArrays = namedtuple("MonitorArrays", "rows kind record_coef cap")
+
+#: the scene's arrays that every run has: parameters (layout.P_*), building, units, load vector, monitors
+SceneArrays = namedtuple("SceneArrays", "p building units load_vec monitors")
+
+#: where a run starts: positions, velocities, and each unit's contact mode and wall side
+StartState = namedtuple("StartState", "q v mode side")
+
+#: what a run writes: impact records (layout.R_*), diagnostics (layout.D_*), final state, each monitor's
+#: peak, its time and the window's square integral, and the dense output at the times ts
+RunOutputs = namedtuple("RunOutputs", "recs diag q v peak peak_t x2 ts samples")
+
+#: the state the loop advances: every unit's contact state (mode, wall side, slide sign, offset from its
+#: floor, escape flags of the event searches, what settle checks), positions and velocities
+RunState = namedtuple("RunState", "mode side sigma offset escape escape_v check q v")
+
+#: eigen-data of configurations, one slot each (segment.config_slot): configuration key, reduced size,
+#: eigenvalues, eigenvectors and inverse, K^-1, reduced damping, full index of each reduced
+#: degree of freedom, reduced load, and the harmonic particular solution per unit load
+ConfigCache = namedtuple("ConfigCache", "key size lam vec vinv kinv damping dof load forced")
+
+#: per-slot modal tables (modal.modal_slot): key, viscous quadratic form, the load's work per mode,
+#: each monitor's modal coefficients and curvature bound
+ModalTables = namedtuple("ModalTables", "key gvis lmod mvec mbnd")
+
+#: a record's whole sample step per slot (scene_loop.step_tables): key, exp(kap dt), integral tables
+StepTables = namedtuple("StepTables", "key ek pair single")
+
+#: a segment in coefficient form (rows C, P over the exponents kap) with exp(kap tau), the integral
+#: tables over tau and |kap|^n
+Segment = namedtuple("Segment", "kap C P ek pair single kpow")
+
+#: scratch rows: gap and contact rows (cs ps, cq pq), a monitor's row (cm pm), velocity rows (cv pv),
+#: and two work rows (cu pu)
+Rows = namedtuple("Rows", "cs ps cq pq cm pm cv pv cu pu")
+
+#: scratch vectors: the peak search's stack, an event search's output, the dense output's state, the
+#: velocities before an impact, reduced-size scratch, |modal amplitudes|, the units' offsets before a
+#: segment, and the weights of the half rows (modal.mode_weights)
+Vectors = namedtuple("Vectors", "stack found qs vs v_before reduced moduli s_before wt")
+
+#: the events found on a segment, per unit: time, wall side, kind; and what an instant's impacts did
+Events = namedtuple("Events", "t side kind hit impulse")
+
+#: tables kept across segments: modal tables, a record step's tables, build_segment's scratch
+#: (floats, complexes) and the cache slot to replace next
+Tables = namedtuple("Tables", "modal step work cursor")
+
+#: the whole workspace of a run, allocated once
+Workspace = namedtuple("Workspace", "seg rows vecs events tables")
+
+#: what the steps at an event's instant (resolve_events, settle, _record_impacts) work in: the segment's
+#: rows (kap C P), contact rows (cs ps cq pq), build_segment's scratch, the configuration cache and its
+#: cursor, the events and the velocities before them.  The same arrays as the workspace's, bundled apart: these steps are compiled
+#: calls, and each array of their arguments is copied in on every event
+InstantScratch = namedtuple("InstantScratch", "kap C P cs ps cq pq work cache cursor events v_before")

@@ -1,0 +1,64 @@
+"""The engine's compiled functions take named bundles (impact.engine.bundles), not dozens of positional arrays.
+
+The steps inlined on every segment of a scene run are the exception, and they are named here: handing them
+bundles cost 8 to 31 % of a run (docs/architecture.md, "How the scene loop's arrays travel").  A new compiled
+function with more than ten parameters fails this test until it takes bundles or joins that list with a
+measurement behind it.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import numpy as np
+
+import impact.engine
+from impact.engine import bundles
+
+ENGINE = Path(impact.engine.__file__).parent
+MOST_PARAMETERS = 10
+
+# inlined on every segment, where each array of the arguments costs a reference count
+PER_SEGMENT_STEPS = {
+    "build_segment", "search_events", "integrate_segment", "integrate_energy", "integrate_modal",
+    "monitor_modal", "monitor_row", "curvature_bound", "window_square", "move_to_end", "_same_unit_state",
+}
+
+
+def compiled_functions(folder: Path):
+    """(file name, function name, number of parameters) of every @njit function below folder."""
+    for path in sorted(folder.glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.FunctionDef) and any("njit" in ast.unparse(d) for d in node.decorator_list):
+                yield path.name, node.name, len(node.args.args), "inline='always'" in \
+                    " ".join(ast.unparse(d) for d in node.decorator_list)
+
+
+def test_compiled_functions_take_at_most_ten_parameters_but_the_per_segment_steps():
+    found = list(compiled_functions(ENGINE))
+    assert len(found) > 50  # the walk sees the engine
+    too_many = [(f, name, n) for f, name, n, _ in found if n > MOST_PARAMETERS and name not in PER_SEGMENT_STEPS]
+    assert too_many == []
+
+
+def test_the_exempt_steps_are_inlined_and_exist():
+    """An exemption is for an inlined per-segment step only; one that is renamed or no longer inlined goes."""
+    inlined = {name: inline for _, name, _, inline in compiled_functions(ENGINE)}
+    assert PER_SEGMENT_STEPS <= set(inlined)
+    assert all(inlined[name] for name in PER_SEGMENT_STEPS)
+
+
+def test_a_synthetic_engine_folder_with_a_long_signature_is_caught(tmp_path):
+    """The walk is not blind: a compiled function with eleven parameters in a folder of its own is found."""
+    (tmp_path / "long.py").write_text(
+        "from numba import njit\n\n@njit(cache=True)\ndef long(a, b, c, d, e, f, g, h, i, j, k):\n    return a\n")
+    assert [(name, n) for _, name, n, _ in compiled_functions(tmp_path)] == [("long", 11)]
+
+
+def test_a_bundle_is_read_by_name_and_by_position_alike():
+    """The compiled code reads some bundles by field and unpacks others by position: the two must agree."""
+    units = bundles.UnitArrays(*(np.full(2, float(i)) for i in range(6)))
+    kind, floor, mass, load, gap, restitution = units
+    assert (units.kind[0], units.gap[0], units.restitution[0]) == (kind[0], gap[0], restitution[0]) == (0.0, 4.0, 5.0)
+    assert bundles.RunState._fields[:7] == ("mode", "side", "sigma", "offset", "escape", "escape_v", "check")
