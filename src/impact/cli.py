@@ -14,7 +14,7 @@ import math
 import os
 import sys
 
-from impact.model.params import STARTS, ParameterError, Protocol, System
+from impact.model.params import IPC_CLASSES, STARTS, ParameterError, Protocol, System, ipc_class
 
 DEFAULTS = dict(mu=0.01, beta=0.0048, e=0.25, gap_ratio=1.0, force_ratio=0.096)
 
@@ -95,30 +95,25 @@ def _finite(obj):
 
 
 def cmd_run(args) -> dict:
-    from impact.engine.paper import simulate
+    """One run of the paper's structure; with --units N > 1 the damper is N units of mass mu/N, gap d each.
 
-    system = _system(args)
-    if args.units > 1:
-        return _run_units(system, args)
-    res = simulate(system, args.r, _protocol(args))
-    out = {"damper": system.kind, "parameters": system.as_dict(), "gap": system.gap, "a_max": system.a_max}
-    out.update(res.as_json())
-    return out
-
-
-def _run_units(system: System, args) -> dict:
-    """A multi-unit damper (--units N > 1) on the scene core: N units of mass mu/N, gap d each."""
-    from impact.engine.scenes import amplitude, simulate_scene
+    The engine picks the loop (impact.engine.run.LOOPS): the paper loop for one unit, the scene loop for more.
+    """
+    from impact.engine.run import simulate
     from impact.model.scene import paper_scene_from_system
 
-    scene = paper_scene_from_system(system, args.r, _protocol(args), units=args.units)
-    res = simulate_scene(scene)
-    amp = amplitude(res)
-    cycles = (scene.t_end - scene.t_window) * args.r / (2.0 * math.pi)
+    system = _system(args)
+    res = simulate(paper_scene_from_system(system, args.r, _protocol(args), units=args.units))
+    cycles = res.window_span * args.r / (2.0 * math.pi)
+    aipc = res.diagnostics["impacts_in_window"] / args.units / cycles if math.isfinite(res.amplitude) else math.nan
     out = {"damper": system.kind, "units": args.units, "parameters": system.as_dict(), "gap": system.gap,
-           "a_max": system.a_max, "r": args.r, "amplitude": amp, "amplitude_ratio": amp / system.a_max,
-           "aipc_per_unit": res.diagnostics["impacts_in_window"] / args.units / cycles,
-           "diagnostics": res.diagnostics}
+           "a_max": system.a_max, "r": args.r, "amplitude": res.amplitude,
+           "amplitude_ratio": res.amplitude / system.a_max, "loop": res.loop}
+    if args.units == 1:
+        out.update(aipc=aipc, ipc_class=IPC_CLASSES[ipc_class(aipc)] if ipc_class(aipc) >= 0 else "undefined")
+    else:
+        out["aipc_per_unit"] = aipc
+    out["diagnostics"] = res.diagnostics
     return out
 
 

@@ -21,7 +21,8 @@ By concern:
 - :mod:`.diagnostics`  a run's diagnostics as named numbers and its energy balance
 - :mod:`.jitcache`     numba's on-disk cache kept honest, and the compile lock
 - :mod:`.paper`        runs and sweeps of the paper's system (:class:`impact.model.params.System`)
-- :mod:`.scenes`       runs of scenes (:class:`impact.model.scene.Scene`)
+- :mod:`.scenes`       runs of scenes (:class:`impact.model.scene.Scene`) on the scene loop
+- :mod:`.run`          the one entry point, :func:`.run.simulate`: its table LOOPS picks the loop a scene needs
 
 See ``docs/architecture.md`` for where the engine sits and ``docs/model.md`` for what it solves.
 """

@@ -72,12 +72,19 @@ def initial_state(system: System, start: str):
     return np.array([0.0, 0.0, side * half, 0.0]), K.contact_code(K.MODE_STUCK, side, 0)
 
 
-def _check_resonance(system: System, r: float):
+def check_resonance(system: System, r: float):
     if system.beta == 0.0 and abs(r - 1.0) < 1e-12:
         raise ValueError("r = 1 with beta = 0 is the undamped resonance: the forced response is unbounded")
 
 
 def param_vector(system: System, r: float, protocol: Protocol, t0: float = 0.0) -> np.ndarray:
+    """The paper loop's parameter vector (paper_loop.P_*) of one run under the protocol."""
+    return run_parameters(system, r, protocol.t_end, protocol.t_window, protocol.max_events_per_period, t0)
+
+
+def run_parameters(system: System, r: float, t_end: float, t_window: float, max_events_per_period: int,
+                   t0: float = 0.0) -> np.ndarray:
+    """param_vector with the run's times given (a scene carries them, not a Protocol)."""
     p = np.zeros(K.NPAR)
     p[K.P_MU] = system.mu
     p[K.P_BETA] = system.beta
@@ -88,9 +95,9 @@ def param_vector(system: System, r: float, protocol: Protocol, t0: float = 0.0) 
     p[K.P_R] = r
     p[K.P_PHI] = system.phase
     p[K.P_VSTICK] = STICK_VELOCITY * system.force_ratio
-    p[K.P_TEND] = protocol.t_end
-    p[K.P_TWIN] = protocol.t_window
-    p[K.P_MAXEV] = protocol.max_events_per_period
+    p[K.P_TEND] = t_end
+    p[K.P_TWIN] = t_window
+    p[K.P_MAXEV] = max_events_per_period
     p[K.P_T0] = t0
     return p
 
@@ -129,7 +136,7 @@ def simulate(system: System, r: float, protocol: Protocol = Protocol(), *, recor
     state/contact: start from a given (x, x', y, y') and contact code instead of
     the protocol's rest state (continuation sweeps, closed-form orbits).
     """
-    _check_resonance(system, r)
+    check_resonance(system, r)
     if state is None:
         z0, code = initial_state(system, protocol.start)
     else:

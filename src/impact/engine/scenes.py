@@ -53,6 +53,12 @@ class SceneResult:
     final_v: np.ndarray
     records: dict | None = field(default=None, repr=False)
     samples: dict | None = field(default=None, repr=False)
+    #: the paper's amplitude, sqrt(2) RMS of the roof over the window
+    amplitude: float = math.nan
+    #: the time the run spent in the window (its end less the window's start)
+    window_span: float = math.nan
+    #: the engine's loop that ran (impact.engine.run.LOOPS); what it does not measure is NaN
+    loop: str = "scene"
 
     def as_json(self, units: str = "m") -> dict:
         return {
@@ -277,9 +283,11 @@ def _result(scene: Scene, arrays: dict, out: dict) -> SceneResult:
         final_v=out["v"].copy(),
         records=records,
         samples=samples,
+        amplitude=math.sqrt(2.0) * rms,
+        window_span=float(span),
     )
 
 
 def amplitude(result: SceneResult) -> float:
     """The paper's amplitude sqrt(2) RMS of the roof over the window."""
-    return math.sqrt(2.0) * result.rms_roof_displacement
+    return result.amplitude

@@ -222,13 +222,14 @@ class Scene:
 def paper_scene(kind: str, mu: float, beta: float, e: float, gap: float, r: float, *, rp: float = 0.0,
                 force_ratio: float = 0.096, periods: float = 500.0, average_from: float = 250.0,
                 start: str = "centre", units: int = 1, nu: float = 0.0, gravity: float = G_GRAV,
-                phase: float = 0.0) -> Scene:
+                phase: float = 0.0, max_events_per_period: int = 20000) -> Scene:
     """The paper's one-storey structure in model units (M = 1, omega = 1) as a scene."""
     building = Building.paper(beta)
     damper = Damper(kind, mass=mu, gap=gap, e=e, tuning=rp if kind == "pid" else 0.0, nu=nu, units=units)
     period = 2.0 * math.pi
     return Scene(building, (damper,), Harmonic(force_ratio, r, phase), duration=periods * period,
-                 window=average_from * period, start=start, gravity=gravity)
+                 window=average_from * period, start=start, gravity=gravity,
+                 max_events_per_period=max_events_per_period)
 
 
 def paper_scene_from_system(system, r: float, protocol, units: int = 1) -> Scene:
@@ -237,4 +238,5 @@ def paper_scene_from_system(system, r: float, protocol, units: int = 1) -> Scene
     gravity = system.friction_accel / system.nu if system.nu > 0 else G_GRAV
     return paper_scene(system.kind, system.mu, system.beta, system.e, system.gap, r, rp=system.rp,
                        force_ratio=system.force_ratio, periods=protocol.periods, average_from=protocol.average_from,
-                       start=protocol.start, units=units, nu=system.nu, gravity=gravity, phase=system.phase)
+                       start=protocol.start, units=units, nu=system.nu, gravity=gravity, phase=system.phase,
+                       max_events_per_period=protocol.max_events_per_period)

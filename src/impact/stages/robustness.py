@@ -4,8 +4,8 @@ A :class:`Design` is one damper on the paper's one-storey structure (model units
 structure's frequency is 1), at its design point: the CID and PID at their optimum gap ratio, the TMD at
 its equal-peak optimum.  Every measure is the paper's X_m, the largest protocol amplitude over a grid of
 forcing frequencies divided by the bare structure's resonant amplitude, taken under changed conditions on
-the exact scene loop (:mod:`impact.engine.scenes`), or for the undamped CID and PID on the paper kernel through an
-exact similarity (:func:`paper_system`):
+the exact engine (:func:`impact.engine.run.simulate`, which runs the undamped CID and PID, described through an
+exact similarity as the paper's system (:func:`paper_system`), on its paper loop):
 
 * the force amplitude scaled by s with the physical gap left as designed (Table 1, row 9);
 * the structure's frequency drifted by a factor 1 + delta through its stiffness, the damper left as
@@ -25,11 +25,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
-from impact.engine.paper import simulate
-from impact.engine.scenes import amplitude, simulate_scene
+from impact.engine.run import simulate
 from impact.model.building import Building
 from impact.model.params import Protocol, System, a_max, check_choice, check_fields
-from impact.model.scene import DAMPER_KINDS, Damper, Harmonic, Scene
+from impact.model.scene import DAMPER_KINDS, Damper, Harmonic, Scene, paper_scene_from_system
 from impact.outputs.datasets import optimum
 
 BAND = 0.25   # "X_m stays within 25 % of its design value"
@@ -111,33 +110,37 @@ def bare_amplitude(design: Design, conditions: Conditions = Conditions()) -> flo
 
 
 def paper_system(design: Design, conditions: Conditions = Conditions()) -> System:
-    """The undamped CID or PID under ``conditions`` as the paper kernel's System, by exact similarity.
+    """The undamped CID or PID under ``conditions`` as the paper's System, by exact similarity.
 
     In the drifted structure's own time (t' = (1 + delta) t) and the same lengths, the motion is the design's
     with the force F s / (1 + delta)^2, the same clearance d and the pendulum's frequency r' / (1 + delta).
     """
     if design.kind == "tmd" or design.damping != 0.0:
-        raise ValueError("the paper kernel has no TMD and no pendulum damping")
+        raise ValueError("the paper's system has no TMD and no pendulum damping")
     w = conditions.frequency
     return System(design.kind, mu=design.mu, beta=design.beta, e=design.e, gap=design.gap,
                   rp=design.tuning / w if design.kind == "pid" else 0.0,
                   force_ratio=conditions.scale * design.force_ratio / (w * w))
 
 
-def on_paper_kernel(design: Design) -> bool:
-    """Whether the paper kernel runs this design: one undamped CID or PID unit."""
+def has_paper_form(design: Design) -> bool:
+    """Whether the design is one undamped CID or PID unit: the paper's system (:func:`paper_system`), which the
+    engine runs on its fast loop."""
     return design.kind != "tmd" and design.damping == 0.0 and design.units == 1
 
 
 def peak_response(design: Design, r_grid, protocol: Protocol, conditions: Conditions = Conditions()) -> dict:
-    """X_m over the frequency grid and its frequency; with the scene core also the damper's stroke (the
-    largest over the grid, and at X_m).  The undamped CID and PID run on the paper kernel (:func:`paper_system`),
-    five to ten times faster, which gives no stroke; :func:`scene_peak_response` measures it."""
+    """X_m over the frequency grid and its frequency; for a design without the paper's form also the damper's
+    stroke (the largest over the grid, and at X_m).  A design with the paper's form (:func:`has_paper_form`) is
+    described as the paper's system in the drifted structure's own time (:func:`paper_system`), and asks for
+    the amplitude alone: the engine runs it on its paper loop, five to ten times faster, which measures no
+    stroke; :func:`scene_peak_response` measures it."""
     r_grid = np.asarray(r_grid, dtype=float)
-    if on_paper_kernel(design):
+    if has_paper_form(design):
         system = paper_system(design, conditions)
         start = replace(protocol, start=design.start)
-        ratios = np.array([simulate(system, float(r), start).amplitude_ratio for r in r_grid])
+        ratios = np.array([simulate(paper_scene_from_system(system, float(r), start)).amplitude / system.a_max
+                           for r in r_grid])
         i = int(np.argmax(ratios))
         return {"X_m": float(ratios[i]), "r_at_max": float(r_grid[i])}
     return scene_peak_response(design, r_grid, protocol, conditions)
@@ -148,8 +151,9 @@ def scene_peak_response(design: Design, r_grid, protocol: Protocol, conditions: 
     """:func:`peak_response` on the scene core, for any damper, with its stroke."""
     amps, strokes = [], []
     for r in np.asarray(r_grid, dtype=float):
-        result = simulate_scene(design_scene(design, float(r), protocol, conditions, unit_starts))
-        amps.append(amplitude(result))
+        result = simulate(design_scene(design, float(r), protocol, conditions, unit_starts),
+                          measures=("amplitude", "peaks"))
+        amps.append(result.amplitude)
         strokes.append(float(np.max(result.peak_strokes)))
     amps, strokes = np.array(amps), np.array(strokes)
     i = int(np.argmax(amps))
@@ -244,10 +248,10 @@ def design_dataset(design: Design, grids: dict, r_grid, protocol: Protocol, stro
     wanted = {name: np.asarray(grids[name], dtype=float) for name in applicable(design.kind) if name in grids}
     sweeps = sensitivity(design, r_grid, protocol, scales=wanted.get("scale", ()), drifts=wanted.get("drift", ()),
                          dampings=wanted.get("damping", ()), restitutions=wanted.get("e", ()))
-    # the stroke needs the scene core, so the design point always runs there (Table 1, row 5); a design on the
-    # paper kernel takes its X_m from there, as along its variations
+    # the stroke needs the scene loop, so the design point always runs there (Table 1, row 5); a design with
+    # the paper's form takes its X_m from the paper loop, as along its variations
     on_scene = scene_peak_response(design, r_grid, protocol)
-    design_point = {**on_scene, **peak_response(design, r_grid, protocol)} if on_paper_kernel(design) else on_scene
+    design_point = {**on_scene, **peak_response(design, r_grid, protocol)} if has_paper_form(design) else on_scene
     data = {f"{m}_design": ((), design_point[m], {"long_name": f"{text}, at the design point", "units": u})
             for m, (text, u) in MEASURES.items()}
     coords = {}

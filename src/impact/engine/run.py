@@ -1,0 +1,119 @@
+"""One entry point to the engine: ``simulate(scene, measures=...)`` picks the loop that runs it.
+
+    result = simulate(scene)                                  # amplitude, impacts, diagnostics
+    result = simulate(scene, measures=("amplitude", "peaks"))  # and the certified peaks
+
+:data:`LOOPS` is the dispatch table, tried in order: the first loop that can run the scene and
+measure what is asked runs it.  The paper loop (:mod:`.paper_loop`) runs the paper's one-storey,
+one-unit harmonic case in model units, several times faster (``benchmarks/bench_loops.py``);
+the scene loop (:mod:`.scene_loop`) runs every scene.  Both return a :class:`~.scenes.SceneResult`;
+what a loop does not measure is NaN there, and ``result.loop`` names the loop that ran.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from impact.engine import paper
+from impact.engine import paper_loop as K
+from impact.engine.diagnostics import read_diagnostics
+from impact.engine.scenes import SceneResult, simulate_scene
+from impact.model.params import ParameterError, System
+from impact.model.scene import Harmonic, Scene
+
+#: what a run can measure: the window's amplitude (sqrt 2 RMS of the roof), the impacts and diagnostics
+#: with the final state, the certified peaks of every monitor (roof, drifts, strokes), impact records and
+#: the state at requested times
+MEASURES = ("amplitude", "impacts", "peaks", "records", "samples")
+DEFAULT_MEASURES = ("amplitude", "impacts")
+PAPER_MEASURES = frozenset(("amplitude", "impacts"))
+
+
+@dataclass(frozen=True)
+class Loop:
+    """A loop of the engine: whether it runs a scene with these measures, and the run."""
+
+    fits: Callable[[Scene, frozenset], bool]
+    run: Callable[..., SceneResult]
+
+
+def as_paper_system(scene: Scene) -> System | None:
+    """The scene as the paper loop's System, when it is the paper's case in model units; None otherwise.
+
+    The paper's case: one storey of mass 1 and stiffness 1 (omega = 1, time in radians of the structure),
+    one CID or undamped PID unit, a harmonic force on that storey, every unit starting at rest in the
+    centre or on a wall.  Every number is taken as the scene holds it, so a scene built by
+    :func:`impact.model.scene.paper_scene_from_system` runs exactly the System it was built from.
+    """
+    b = scene.building
+    if b.storeys != 1 or b.masses[0] != 1.0 or b.storey_stiffness[0] != 1.0 or len(scene.dampers) != 1:
+        return None
+    d = scene.dampers[0]
+    load = scene.load
+    if d.kind not in ("cid", "pid") or d.units != 1 or d.damping != 0.0 or d.floor not in (None, 1):
+        return None
+    if not isinstance(load, Harmonic) or load.floor not in (None, 1) or scene.unit_starts is not None:
+        return None
+    if b.damping[0, 0] != 2.0 * b.zeta:
+        return None  # the paper's damping is C = 2 beta
+    return System(d.kind, mu=d.mass, beta=b.zeta, e=d.e, gap=d.gap, rp=d.tuning if d.kind == "pid" else 0.0,
+                  force_ratio=load.amplitude, phase=load.phase, nu=d.nu)
+
+
+def _paper_fits(scene: Scene, measures: frozenset) -> bool:
+    return measures <= PAPER_MEASURES and as_paper_system(scene) is not None
+
+
+def _run_paper(scene: Scene, measures: frozenset, record: int, times) -> SceneResult:
+    system = as_paper_system(scene)
+    r = scene.load.omega
+    paper.check_resonance(system, r)
+    z0, code = paper.initial_state(system, scene.start)
+    p = paper.run_parameters(system, r, scene.t_end, scene.t_window, scene.max_events_per_period)
+    fric = np.array([system.nu * scene.gravity]) if system.nu > 0.0 else None
+    paper.ensure_compiled(system.kind, fric is not None)
+    diag = np.zeros(K.NDIAG)
+    z_out = np.zeros(4)
+    K.run(p, z0, int(code), paper.pid_data(system, r), fric, np.zeros((0, K.NREC)), diag, z_out)
+    span = diag[K.D_TEND] - scene.t_window
+    complete = not diag[K.D_CAP] and span > 0
+    nan = math.nan
+    # the amplitude as the paper loop's own runs compute it (engine.paper), to the last bit
+    amp = math.sqrt(2.0 * diag[K.D_X2WIN] / span) if complete else nan
+    return SceneResult(
+        scene=scene, peak_roof_displacement=nan, peak_roof_displacement_time=nan,
+        rms_roof_displacement=math.sqrt(diag[K.D_X2WIN] / span) if complete else nan,
+        peak_roof_acceleration=nan, peak_interstorey_drift=nan, peak_drifts=np.full(1, nan),
+        peak_strokes=np.full(1, nan), impacts=int(diag[K.D_IMPACTS]), diagnostics=read_diagnostics(diag, K),
+        final_q=z_out[[0, 2]].copy(), final_v=z_out[[1, 3]].copy(), amplitude=amp, window_span=float(span),
+        loop="paper")
+
+
+def _run_scene(scene: Scene, measures: frozenset, record: int, times) -> SceneResult:
+    return simulate_scene(scene, record=record, times=times)
+
+
+#: the loops, tried in order (the fast special case first)
+LOOPS = {"paper": Loop(_paper_fits, _run_paper), "scene": Loop(lambda scene, measures: True, _run_scene)}
+
+
+def simulate(scene: Scene, measures=DEFAULT_MEASURES, *, record: int = 0, times=None) -> SceneResult:
+    """Run a scene on the engine's first loop (:data:`LOOPS`) that measures what is asked.
+
+    measures: names from :data:`MEASURES`; record: keep up to this many impact records (with "records");
+    times: sorted times of the dense output (with "samples").
+    """
+    asked = frozenset(measures)
+    unknown = sorted(asked - set(MEASURES))
+    if unknown:
+        raise ParameterError(f"measures: {', '.join(map(repr, unknown))} unknown; allowed {', '.join(MEASURES)}")
+    if (record and "records" not in asked) or (times is not None and "samples" not in asked):
+        raise ParameterError("record and times come with the measures 'records' and 'samples'")
+    for loop in LOOPS.values():
+        if loop.fits(scene, asked):
+            return loop.run(scene, asked, record, times)
+    raise AssertionError("the scene loop runs every scene")  # unreachable: its fits is always true

@@ -1,0 +1,82 @@
+"""The engine's one entry point: impact.engine.run.simulate picks the loop from what the scene needs."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from impact.engine import run as engine
+from impact.engine.paper import simulate as paper_simulate
+from impact.engine.scenes import simulate_scene
+from impact.model.building import Building
+from impact.model.params import ParameterError, Protocol, System
+from impact.model.scene import Damper, Harmonic, Scene, paper_scene_from_system
+
+SHORT = Protocol(periods=60.0, average_from=30.0, start="left")
+PAPER = dict(mu=0.01, beta=0.0048, e=0.25)
+
+
+@pytest.mark.parametrize("system", [System.from_gap_ratio("cid", gap_ratio=1.0, **PAPER),
+                                    System.from_gap_ratio("pid", gap_ratio=1.0, rp=1.0, **PAPER)],
+                         ids=["cid", "pid"])
+def test_the_paper_case_runs_on_the_paper_loop_and_gives_its_numbers_to_the_bit(system):
+    scene = paper_scene_from_system(system, 0.97, SHORT)
+    result = engine.simulate(scene)
+    direct = paper_simulate(system, 0.97, SHORT)
+    assert result.loop == "paper"
+    assert result.amplitude == direct.amplitude  # the same System, the same kernel: the same bits
+    assert result.diagnostics["impacts_in_window"] == direct.diagnostics["impacts_in_window"]
+    assert result.impacts == direct.diagnostics["impacts"] > 0
+    assert math.isnan(result.peak_roof_displacement)  # the paper loop certifies no peaks
+
+
+def test_asking_for_peaks_moves_the_same_scene_to_the_scene_loop_and_the_physics_agrees():
+    """At r = 1, g = 1 the steady state is an attractor (tests/test_scene.py's STABLE_CASES): a run forgets
+    round-off, so the two exact loops agree to round-off over the paper's whole protocol."""
+    system = System.from_gap_ratio("cid", gap_ratio=1.0, **PAPER)
+    scene = paper_scene_from_system(system, 1.0, Protocol(start="left"))
+    fast = engine.simulate(scene)
+    full = engine.simulate(scene, measures=("amplitude", "peaks"))
+    assert (fast.loop, full.loop) == ("paper", "scene")
+    assert full.amplitude == simulate_scene(scene).amplitude
+    assert abs(full.amplitude - fast.amplitude) <= 1e-12 * fast.amplitude
+    assert full.peak_roof_displacement >= fast.amplitude / math.sqrt(2.0)  # a peak is at least the RMS
+
+
+@pytest.mark.parametrize("scene", [
+    Scene(Building.paper(0.0048), (Damper("cid", 0.01, gap=1.0, e=0.25, units=2),), Harmonic(0.096, 0.97),
+          duration=40.0),
+    Scene(Building.paper(0.0048), (Damper("tmd", 0.01, tuning=0.98, damping=0.05),), Harmonic(0.096, 0.97),
+          duration=40.0),
+    Scene(Building.uniform(2, 1.0, 0.02), (Damper("cid", 0.05, gap=0.05, e=0.5),), Harmonic(0.1, 6.0),
+          duration=10.0),
+    Scene(Building.explicit([1.0], [4.0], zeta=0.0048), (Damper("cid", 0.01, gap=1.0, e=0.25),),
+          Harmonic(0.096, 1.9), duration=40.0),
+], ids=["two units", "tmd", "two storeys", "not model units"])
+def test_every_other_scene_runs_on_the_scene_loop(scene):
+    assert engine.as_paper_system(scene) is None
+    assert engine.simulate(scene).loop == "scene"
+
+
+def test_the_dispatch_table_tries_the_special_case_first_and_the_scene_loop_runs_everything():
+    assert tuple(engine.LOOPS) == ("paper", "scene")
+    assert engine.LOOPS["scene"].fits(Scene(Building.paper(0.01), (), Harmonic(0.1, 1.2), duration=10.0),
+                                     frozenset(engine.MEASURES))
+
+
+def test_records_and_samples_come_from_the_scene_loop():
+    system = System.from_gap_ratio("cid", gap_ratio=1.0, **PAPER)
+    scene = paper_scene_from_system(system, 0.97, SHORT)
+    result = engine.simulate(scene, measures=("amplitude", "records", "samples"), record=5,
+                             times=np.linspace(0.0, 1.0, 3))
+    assert result.loop == "scene" and len(result.records["t"]) == 5 and result.samples["q"].shape == (3, 2)
+
+
+def test_unknown_measures_and_stray_options_are_refused_by_name():
+    scene = Scene(Building.paper(0.01), (), Harmonic(0.1, 1.2), duration=10.0)
+    with pytest.raises(ParameterError, match="measures: 'stroke' unknown; allowed amplitude, impacts"):
+        engine.simulate(scene, measures=("amplitude", "stroke"))
+    with pytest.raises(ParameterError, match="record and times"):
+        engine.simulate(scene, record=3)
