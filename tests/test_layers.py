@@ -40,14 +40,14 @@ MAY_IMPORT = {
 SHARED_SCRIPTS = {"validation_fig3_data": "validation_figure_data", "validation_fig5_data": "validation_figure_data"}
 
 
-def _part(path: Path) -> str:
-    rel = path.relative_to(PACKAGE)
+def _part(path: Path, package_dir: Path = PACKAGE) -> str:
+    rel = path.relative_to(package_dir)
     return rel.parts[0] if len(rel.parts) > 1 else rel.stem
 
 
-def _imports(path: Path):
+def _imports(path: Path, src: Path = SRC):
     """(line, imported module) of every import statement of a file, function-level ones included."""
-    package = ".".join(path.relative_to(SRC).with_suffix("").parts[:-1])
+    package = ".".join(path.relative_to(src).with_suffix("").parts[:-1])
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.Import):
             for alias in node.names:
@@ -70,17 +70,42 @@ def test_every_part_of_the_package_is_in_the_layer_table():
     assert {_part(p) for p in _library_modules()} <= set(MAY_IMPORT)
 
 
-@pytest.mark.parametrize("path", _library_modules(), ids=lambda p: str(p.relative_to(PACKAGE)))
-def test_imports_go_down_the_layers(path):
-    own = _part(path)
+def _upward_imports(path: Path, src: Path = SRC) -> list:
+    """The imports of a module of the package that go above its layer, as 'line N: module'."""
+    own = _part(path, src / "impact")
     allowed = MAY_IMPORT[own] | {own}
     upward = []
-    for line, name in _imports(path):
+    for line, name in _imports(path, src):
         if name.startswith("impact."):
             target = name.split(".")[1]
             if target in MAY_IMPORT and target not in allowed:
                 upward.append(f"line {line}: {name}")
-    assert not upward, f"{path.relative_to(ROOT)} ({own}) imports above its layer: {upward}"
+    return upward
+
+
+@pytest.mark.parametrize("path", _library_modules(), ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_imports_go_down_the_layers(path):
+    upward = _upward_imports(path)
+    assert not upward, f"{path.relative_to(ROOT)} ({_part(path)}) imports above its layer: {upward}"
+
+
+def test_the_layer_check_catches_every_form_of_an_upward_import(tmp_path):
+    """On a synthetic package: absolute, from-, relative and function-level imports upwards are all found,
+    and imports down the layers or of the module's own part are not."""
+    engine = tmp_path / "impact" / "engine"
+    engine.mkdir(parents=True)
+    (engine / "loop.py").write_text(
+        "import impact.stages.sweeps\n"
+        "from impact.outputs import files\n"
+        "from ..stages import numerics\n"
+        "from impact.model.params import System\n"
+        "from . import segment\n"
+        "def late():\n"
+        "    from impact.cli import main\n")
+    found = _upward_imports(engine / "loop.py", tmp_path)
+    assert found == ["line 1: impact.stages.sweeps", "line 2: impact.outputs", "line 2: impact.outputs.files",
+                     "line 3: impact.stages", "line 3: impact.stages.numerics", "line 7: impact.cli",
+                     "line 7: impact.cli.main"]
 
 
 @pytest.mark.parametrize("path", sorted((PACKAGE / "model").rglob("*.py")), ids=lambda p: p.name)
