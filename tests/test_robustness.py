@@ -10,19 +10,9 @@ import xarray as xr
 
 from impact.engine.paper import sweep
 from impact.model.params import Protocol, System
-from impact.stages.robustness import (
-    Conditions,
-    Design,
-    design_dataset,
-    designs_from_study,
-    multi_unit,
-    peak_response,
-    same_level,
-    scene_peak_response,
-    stroke_cap,
-    table1_measured,
-    within_band,
-)
+from impact.stages.robustness.designs import Conditions, Design, designs_from_study, stroke_cap
+from impact.stages.robustness.runs import design_dataset, multi_unit, peak_response, scene_peak_response
+from impact.stages.robustness.table import same_level, table1_measured, within_band
 
 BETA = 0.0048
 SHORT = Protocol(periods=120, average_from=60)
@@ -175,7 +165,7 @@ def test_a_defined_change_beyond_the_band_refutes_the_claim_despite_a_failed_run
                     coords={"units": [1, 2, 9]})
     change, holds = same_level(ds)
     assert change == pytest.approx(0.2) and holds is False
-    from impact.stages.robustness import _multi_unit_row
+    from impact.stages.robustness.table import _multi_unit_row
 
     row = _multi_unit_row("cid_left", ds.assign_attrs(kind="cid"))
     assert row["supports"] == "no" and "n = 9" in row["note"] and "refutes" in row["note"]

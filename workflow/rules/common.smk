@@ -16,7 +16,7 @@ from impact.stages import loads
 from impact.model.params import IMPACT_KINDS
 from impact.model.scene import DAMPER_KINDS
 from impact.stages.design import chart_specs
-from impact.stages.robustness import design_names
+from impact.stages.robustness.designs import design_names
 from impact.stages.sweeps import all_curves, check_config, figure_curves, friction_scale
 from impact.model.params import curve_id
 

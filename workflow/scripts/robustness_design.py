@@ -4,7 +4,8 @@ import json
 from impact.model.params import Protocol
 from impact.outputs.files import write_dataset
 from impact.outputs.job_log import log_versions, logged
-from impact.stages.robustness import Design, design_dataset, grids, stroke_cap
+from impact.stages.robustness.designs import Design, grids, stroke_cap
+from impact.stages.robustness.runs import design_dataset
 from impact.stages.sweeps import freq_grid
 
 with logged(snakemake.log[0]) as log:

@@ -5,7 +5,7 @@ import xarray as xr
 
 from impact.outputs.files import write_json_atomic
 from impact.outputs.job_log import logged
-from impact.stages.robustness import designs_from_study, optima_from_sweeps
+from impact.stages.robustness.designs import designs_from_study, optima_from_sweeps
 
 with logged(snakemake.log[0]) as log:
     optima = optima_from_sweeps(xr.load_dataset(path) for path in snakemake.input.sweeps)

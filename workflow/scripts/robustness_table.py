@@ -5,7 +5,7 @@ import xarray as xr
 
 from impact.outputs.files import write_csv_atomic
 from impact.outputs.job_log import logged
-from impact.stages.robustness import table1_measured
+from impact.stages.robustness.table import table1_measured
 
 with logged(snakemake.log[0]) as log:
     designs = {Path(p).stem: xr.load_dataset(p) for p in snakemake.input.designs}

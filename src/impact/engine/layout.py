@@ -22,9 +22,10 @@ D_CAP, D_NREC, D_STEPS, D_STUCKTIME, D_TEND = 10, 11, 12, 13, 14
 D_FRICTION, D_SEGMENTS, D_SIMULTANEOUS, D_EMAX, D_PEAK_GAVE_UP = 15, 16, 17, 18, 19
 NDIAG = 20
 
-# impact record columns
-R_T, R_UNIT, R_SIDE, R_V0, R_W0, R_V1, R_W1, R_STUCK, R_IMPULSE = 0, 1, 2, 3, 4, 5, 6, 7, 8
-NREC = 9
+# impact record columns: their names in order, and each one's index
+RECORD_COLUMNS = ("t", "unit", "side", "v_minus", "w_minus", "v_plus", "w_plus", "stuck", "impulse")
+R_T, R_UNIT, R_SIDE, R_V0, R_W0, R_V1, R_W1, R_STUCK, R_IMPULSE = range(len(RECORD_COLUMNS))
+NREC = len(RECORD_COLUMNS)
 
 # monitor kinds: a linear combination of positions, or of accelerations plus
 # a multiple of the record (the absolute acceleration under ground motion)

@@ -172,8 +172,7 @@ def _result(system, r, protocol, diag, z_out, final, rec) -> RunResult:
     records = None
     if rec.shape[0]:
         n = int(diag[K.D_NREC])
-        cols = ("t", "side", "x", "v_minus", "w_minus", "v_plus", "w_plus", "stuck")
-        records = {c: rec[:n, i].copy() for i, c in enumerate(cols)}
+        records = {c: rec[:n, i].copy() for i, c in enumerate(K.RECORD_COLUMNS)}
     amax = system.a_max
     return RunResult(
         r=float(r),

@@ -261,8 +261,7 @@ def _result(scene: Scene, arrays: dict, out: dict) -> SceneResult:
     records = None
     if out["recs"].shape[0]:
         n = int(diag[L.D_NREC])
-        cols = ("t", "unit", "side", "v_minus", "w_minus", "v_plus", "w_plus", "stuck", "impulse")
-        records = {c: out["recs"][:n, i].copy() for i, c in enumerate(cols)}
+        records = {c: out["recs"][:n, i].copy() for i, c in enumerate(L.RECORD_COLUMNS)}
     samples = None
     if len(out["ts"]):
         nfull = len(out["q"])

@@ -12,10 +12,19 @@ from __future__ import annotations
 import ast
 import functools
 import hashlib
+import tomllib
 from pathlib import Path
 
 SRC = Path(__file__).resolve().parents[2]  # the folder that holds this impact package
-PACKAGE_DATA = ("*.yaml",)  # pyproject's package-data: read at run time, so part of the code
+PYPROJECT = SRC.parent / "pyproject.toml"
+
+
+@functools.cache
+def package_data() -> tuple[str, ...]:
+    """The package's data files as pyproject.toml's [tool.setuptools.package-data] names them (globs under
+    impact/): they are read at run time, so they are part of the code."""
+    with open(PYPROJECT, "rb") as f:
+        return tuple(tomllib.load(f)["tool"]["setuptools"]["package-data"]["impact"])
 
 
 def module_file(name: str, src: Path = SRC) -> Path | None:
@@ -90,7 +99,8 @@ def _closure(script: Path, src: Path) -> tuple[Path, ...]:
             if path is not None and path not in seen:
                 seen.add(path)
                 todo.append(path)
-    data = {d for p in seen for pattern in PACKAGE_DATA for d in p.parent.glob(pattern)}
+    folders = {p.parent for p in seen}
+    data = {d for pattern in package_data() for d in (src / "impact").glob(pattern) if d.parent in folders}
     return tuple(sorted(seen | data))
 
 

@@ -282,7 +282,8 @@ def simulate_design(chart, params: dict, refinement: int, scale: float = 1.0) ->
 def _simulate_tmd(chart, params: dict, protocol: Protocol) -> float:
     """The TMD on the scene core over the chart's frequencies and its two closed-form peaks."""
     from impact.closed_form.tmd import tmd_peak
-    from impact.stages.robustness import Design, scene_peak_response
+    from impact.stages.robustness.designs import Design
+    from impact.stages.robustness.runs import scene_peak_response
 
     attrs = chart.attrs
     design = Design("tmd", mu=params["mu"], beta=attrs["beta"], tuning=params["tuning"],
