@@ -21,6 +21,7 @@ from impact.baselines import (
 )
 from impact.baselines.penalty import dashpot
 from impact.model.params import System
+from impact.outputs.labels import TOO_SLOW
 
 TWO_PI = 2.0 * math.pi
 
@@ -363,7 +364,7 @@ def test_unresolved_accumulation_fails_fast():
 def test_stability_ok_means_finished_and_within_tolerance():
     import pandas as pd
 
-    from impact.stages.numerics import judge_stability
+    from impact.stages.numerics.tables import judge_stability
 
     rows = [  # case a: the core and three baselines; case b: the core failed, nothing to compare with
         {"case": "a", "method": "core", "status": "ok", "finite": True, "max_penetration": 0.0, "amplitude": 2.0},
@@ -386,26 +387,28 @@ TINY_STUDY = {"periods": 3, "repeats": 2, "ivp_methods": ["RK45"], "rtol": [1e-6
 
 
 def test_a_baseline_over_budget_is_recorded_as_failed_too_slow():
-    from impact.stages import numerics as N
+    from impact.stages.numerics import plan as NP
+    from impact.stages.numerics import runs as NR
+    from impact.stages.numerics import tables as NT
 
     tight = {**TINY_STUDY, "budget": 1e-4}  # no solve_ivp run of 2 periods finishes in 0.1 ms
-    runs = N.stability_runs(tight, families=["ivp"])
-    ivp = [m for m in N.stability_methods(tight) if m.startswith("ivp_")]
-    assert sorted(set(runs["method"])) == sorted(ivp) and len(runs) == len(ivp) * len(N.extreme_cases(tight))
-    assert runs["status"].str.startswith(f"failed: {N.TOO_SLOW}").all(), runs["status"].tolist()
+    runs = NR.stability_runs(tight, families=["ivp"])
+    ivp = [m for m in NP.stability_methods(tight) if m.startswith("ivp_")]
+    assert sorted(set(runs["method"])) == sorted(ivp) and len(runs) == len(ivp) * len(NP.extreme_cases(tight))
+    assert runs["status"].str.startswith(f"failed: {TOO_SLOW}").all(), runs["status"].tolist()
     assert not runs["finite"].any()
-    table = N.stability_table([runs, N.stability_runs(TINY_STUDY, families=["core"])], tight)
+    table = NT.stability_table([runs, NR.stability_runs(TINY_STUDY, families=["core"])], tight)
     assert not table.loc[table["method"].isin(ivp), "ok"].any() and table.loc[table["method"] == "core", "ok"].any()
-    ds = N.work_precision(tight, cases=["pid_tuned"], families=["ivp"])
+    ds = NR.work_precision(tight, cases=["pid_tuned"], families=["ivp"])
     assert ds["failed"].sel(integrator="ivp_RK45", setting=0).item() == 1.0
-    assert N.TOO_SLOW in str(ds["status"].sel(integrator="ivp_RK45", setting=0).item())
+    assert TOO_SLOW in str(ds["status"].sel(integrator="ivp_RK45", setting=0).item())
     assert np.isnan(ds["wall_time"].sel(integrator="ivp_RK45", setting=0).item())
 
 
 def test_a_run_over_a_second_is_timed_once_and_shorter_runs_keep_the_minimum(monkeypatch):
     import time
 
-    from impact.stages import numerics as N
+    from impact.stages.numerics import runs as NR
 
     calls = []
 
@@ -414,31 +417,33 @@ def test_a_run_over_a_second_is_timed_once_and_shorter_runs_keep_the_minimum(mon
         time.sleep(seconds)
         return {"status": "ok"}
 
-    monkeypatch.setattr(N, "ONE_REPEAT_ABOVE", 0.05)
-    best, out = N.timed_repeats(lambda: run(0.06), 10.0, 3)
+    monkeypatch.setattr(NR, "ONE_REPEAT_ABOVE", 0.05)
+    best, out = NR.timed_repeats(lambda: run(0.06), 10.0, 3)
     assert len(calls) == 1 and best >= 0.06 and out == {"status": "ok"}
     calls.clear()
-    best, _ = N.timed_repeats(lambda: run(0.001), 10.0, 3)
+    best, _ = NR.timed_repeats(lambda: run(0.001), 10.0, 3)
     assert len(calls) == 3 and best < 0.05
 
 
 def test_the_numerics_pieces_join_into_the_whole_study():
     """Run as one piece per (case, family) or all at once, every number but the run times is the same."""
-    from impact.stages import numerics as N
+    from impact.stages.numerics import plan as NP
+    from impact.stages.numerics import runs as NR
+    from impact.stages.numerics import tables as NT
 
     cases = ["cid_2eipc", "pid_tuned"]
-    whole = N.work_precision(TINY_STUDY, cases=cases)
-    pieces = [N.work_precision(TINY_STUDY, cases=[c], families=[f]) for c, f in N.work_precision_pieces(TINY_STUDY)
+    whole = NR.work_precision(TINY_STUDY, cases=cases)
+    pieces = [NR.work_precision(TINY_STUDY, cases=[c], families=[f]) for c, f in NP.work_precision_pieces(TINY_STUDY)
               if c in cases]
-    joined = N.combine_work_precision(pieces, TINY_STUDY).sel(case=cases)
+    joined = NT.combine_work_precision(pieces, TINY_STUDY).sel(case=cases)
     assert list(joined["integrator"].values) == list(whole["integrator"].values)
     for name in ("impact_time_error", "velocity_error", "state_error", "amplitude_error", "impacts", "failed",
                  "setting_value", "predictability_horizon"):
         np.testing.assert_array_equal(joined[name].values, whole[name].values, err_msg=name)
     assert (joined["status"].values == whole["status"].values).all()
     assert joined.attrs["budget_seconds"] == 10 and "title" not in joined.attrs
-    runs = [N.stability_runs(TINY_STUDY, families=[f]) for f in N.stability_families(TINY_STUDY)]
-    table, one = N.stability_table(runs[::-1], TINY_STUDY), N.stability(TINY_STUDY)
+    runs = [NR.stability_runs(TINY_STUDY, families=[f]) for f in NP.stability_families(TINY_STUDY)]
+    table, one = NT.stability_table(runs[::-1], TINY_STUDY), NR.stability(TINY_STUDY)
     columns = [c for c in one.columns if c != "wall_time"]
     # a run within a factor of two of its budget (the stiff pendulum's Radau and penalty runs take 10 to 12 s
     # against 10) may finish in one pass and not in the other: that outcome is the machine's speed, not the

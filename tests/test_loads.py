@@ -12,7 +12,9 @@ from impact.engine.scenes import simulate_scene
 from impact.model.params import ParameterError
 from impact.model.records import load_record
 from impact.model.scene import DAMPER_KINDS, GroundMotion, Scene
-from impact.stages import loads as LD
+from impact.stages.loads import plan as LP
+from impact.stages.loads import runs as LR
+from impact.stages.loads import tables as LT
 
 CFG = {
     "storeys": [1, 3], "periods_s": [0.5], "zeta": 0.02, "mass_ratios": [0.02], "e": 0.25, "gap_ratios": [0.5, 1.0],
@@ -27,34 +29,34 @@ CFG = {
 
 @pytest.fixture(scope="module")
 def study():
-    bare = {b: LD.bare_runs(CFG, b) for b in LD.buildings(CFG)}
-    dampers = {(b, k): LD.damper_runs(CFG, b, k, bare[b]) for b in bare for k in DAMPER_KINDS}
-    return bare, dampers, LD.collect(bare, dampers)
+    bare = {b: LR.bare_runs(CFG, b) for b in LP.buildings(CFG)}
+    dampers = {(b, k): LR.damper_runs(CFG, b, k, bare[b]) for b in bare for k in DAMPER_KINDS}
+    return bare, dampers, LT.collect(bare, dampers)
 
 
 def test_untouchable_gap_gives_the_bare_building_under_el_centro_to_1e_9():
     """The stage's five-storey building with a CID it never touches, against lsim of the linear building."""
-    building = LD.make_building({**CFG, "storeys": [5], "periods_s": [2.0]}, "s5_T2")
+    building = LP.make_building({**CFG, "storeys": [5], "periods_s": [2.0]}, "s5_T2")
     gm = GroundMotion.from_record(load_record("elcentro"), pga_g=0.35)
     t, ref = _linear_roof(building, gm.accel, gm.dt)
-    damper = LD.impact_damper("cid", building, 0.02, gap=1e6, e=0.25)
+    damper = LP.impact_damper("cid", building, 0.02, gap=1e6, e=0.25)
     res = simulate_scene(Scene(building, (damper,), gm), times=t)
     assert res.impacts == 0
     assert np.max(np.abs(res.samples["q"][:, 4] - ref)) <= 1e-9 * np.max(np.abs(ref))
-    bare = LD.run(building, (), LD.Load("records", {"record": "elcentro", "intensity": 0.35}, gm))
+    bare = LR.run(building, (), LP.Load("records", {"record": "elcentro", "intensity": 0.35}, gm))
     assert bare["peak_roof"] == pytest.approx(res.peak_roof_displacement, rel=1e-12)
     assert bare["peak_roof"] >= np.max(np.abs(ref)) * (1 - 1e-12)
 
 
 def test_each_seed_is_deterministic_and_scaled_to_its_pga():
-    first, again = LD.random_loads(CFG), LD.random_loads(CFG)
+    first, again = LP.random_loads(CFG), LP.random_loads(CFG)
     for a, b in zip(first, again):
         assert a.labels == b.labels
         np.testing.assert_array_equal(a.load.accel, b.load.accel)
         assert a.load.pga == pytest.approx(a.labels["intensity"] * 9.80665, rel=1e-12)
     seeds = {ld.labels["seed"]: ld.load.accel for ld in first if ld.labels["intensity"] == 0.1}
     assert not np.allclose(seeds[0], seeds[1])
-    w1, w2 = (LD.wind_loads(CFG, LD.make_building(CFG, "s3_T0.5"))[0].load.values for _ in range(2))
+    w1, w2 = (LP.wind_loads(CFG, LP.make_building(CFG, "s3_T0.5"))[0].load.values for _ in range(2))
     np.testing.assert_array_equal(w1, w2)
 
 
@@ -87,14 +89,14 @@ def test_impact_dampers_stay_within_their_gap_and_the_gap_is_sized_at_the_design
 
 def test_the_best_damper_is_the_lowest_ratio_and_verdicts_count_every_run(study):
     _, _, out = study
-    best = LD.best_damper_table(out)
+    best = LT.best_damper_table(out)
     ratios = best[[f"{k}_peak_roof_ratio" for k in DAMPER_KINDS]].to_numpy()
     chosen = best["best"].map(lambda k: DAMPER_KINDS.index(k)).to_numpy()
     np.testing.assert_array_equal(chosen, np.nanargmin(ratios, axis=1))
-    verdicts = LD.verdict_table(out)
+    verdicts = LT.verdict_table(out)
     assert (verdicts["helps"] + verdicts["does_nothing"] + verdicts["makes_worse"] == verdicts["cases"]).all()
     records = verdicts[(verdicts["load"] == "records") & (verdicts["measure"] == "peak_roof")]
-    assert set(records["cases"]) == {len(LD.buildings(CFG)) * 2}   # buildings x PGAs x one record
+    assert set(records["cases"]) == {len(LP.buildings(CFG)) * 2}   # buildings x PGAs x one record
     assert set(verdicts["load"]) == {"records", "kanai-tajimi firm", "wind"}
 
 
@@ -112,8 +114,8 @@ def test_bad_loads_config_names_the_key():
     bad = copy.deepcopy(CFG)
     bad["records"]["design_pga_g"] = 0.2
     with pytest.raises(ParameterError, match="loads.records.design_pga_g"):
-        LD.check_config(bad)
+        LP.check_config(bad)
     bad = copy.deepcopy(CFG)
     bad["wind"]["buildings"] = ["s9_T3"]
     with pytest.raises(ParameterError, match="loads.wind.buildings"):
-        LD.check_config(bad)
+        LP.check_config(bad)

@@ -10,9 +10,9 @@ from impact.outputs.archive import archive_name
 from impact.outputs.code_deps import library_digest
 from impact.stages.validation.grid import SCHEMA_PATH as RIG_SCHEMA
 from impact.stages.validation.grid import study_cases, validation_config
-from impact.stages.numerics import stability_families, work_precision_pieces
+from impact.stages.numerics.plan import stability_families, work_precision_pieces
 from impact.outputs.provenance import git_state
-from impact.stages import loads
+from impact.stages.loads import plan as loads
 from impact.model.params import IMPACT_KINDS
 from impact.model.scene import DAMPER_KINDS
 from impact.stages.design import chart_specs

@@ -1,7 +1,7 @@
 """Glue: one building, bare, under every load of the stage -> results/loads/runs/<building>/bare.nc."""
 from impact.outputs.files import write_dataset
 from impact.outputs.job_log import log_versions, logged
-from impact.stages.loads import bare_runs
+from impact.stages.loads.runs import bare_runs
 
 with logged(snakemake.log[0]) as log:
     log_versions()

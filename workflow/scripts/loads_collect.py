@@ -5,7 +5,7 @@ import xarray as xr
 
 from impact.outputs.files import write_dataset
 from impact.outputs.job_log import logged
-from impact.stages.loads import collect
+from impact.stages.loads.tables import collect
 
 with logged(snakemake.log[0]):
     bare = {Path(p).parent.name: xr.load_dataset(p) for p in snakemake.input.bare}

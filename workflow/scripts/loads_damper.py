@@ -3,7 +3,7 @@ import xarray as xr
 
 from impact.outputs.files import write_dataset
 from impact.outputs.job_log import log_versions, logged
-from impact.stages.loads import damper_runs
+from impact.stages.loads.runs import damper_runs
 
 with logged(snakemake.log[0]) as log:
     log_versions()

@@ -5,7 +5,7 @@ import xarray as xr
 
 from impact.outputs.files import write_csv_atomic
 from impact.outputs.job_log import logged
-from impact.stages.loads import best_damper_table, verdict_table
+from impact.stages.loads.tables import best_damper_table, verdict_table
 
 with logged(snakemake.log[0]) as log:
     datasets = {Path(p).stem: xr.load_dataset(p) for p in snakemake.input.datasets}

@@ -3,7 +3,7 @@ import pandas as pd
 
 from impact.outputs.files import write_csv_atomic
 from impact.outputs.job_log import logged
-from impact.stages.numerics import stability_table
+from impact.stages.numerics.tables import stability_table
 
 with logged(snakemake.log[0]):
     # round_trip: every number as the piece wrote it, so the judgement sees the runs' own values

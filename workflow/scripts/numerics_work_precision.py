@@ -4,7 +4,7 @@ import xarray as xr
 from impact.outputs.files import write_csv_atomic, write_dataset
 from impact.outputs.job_log import logged
 from impact.outputs.provenance import package_versions
-from impact.stages.numerics import combine_work_precision, speed_at_equal_error
+from impact.stages.numerics.tables import combine_work_precision, speed_at_equal_error
 
 with logged(snakemake.log[0]) as log:
     ds = combine_work_precision([xr.load_dataset(p) for p in snakemake.input.pieces], snakemake.params.numerics)

@@ -1,7 +1,7 @@
 """Glue: one work-precision case and one method family -> a piece of the dataset."""
 from impact.outputs.files import write_dataset
 from impact.outputs.job_log import logged
-from impact.stages.numerics import work_precision
+from impact.stages.numerics.runs import work_precision
 
 with logged(snakemake.log[0]) as log:
     w = snakemake.wildcards

@@ -12,19 +12,16 @@ from __future__ import annotations
 import ast
 import functools
 import hashlib
-import tomllib
 from pathlib import Path
 
 SRC = Path(__file__).resolve().parents[2]  # the folder that holds this impact package
-PYPROJECT = SRC.parent / "pyproject.toml"
 
 
-@functools.cache
-def package_data() -> tuple[str, ...]:
-    """The package's data files as pyproject.toml's [tool.setuptools.package-data] names them (globs under
-    impact/): they are read at run time, so they are part of the code."""
-    with open(PYPROJECT, "rb") as f:
-        return tuple(tomllib.load(f)["tool"]["setuptools"]["package-data"]["impact"])
+def data_files(folder: Path) -> set[Path]:
+    """The files beside a package's modules that are not Python: its data (pyproject.toml's package-data
+    says which ship), read at run time and so part of the code.  Found by looking, so that a copy of the
+    workflow without pyproject.toml, or an installed package, finds the same."""
+    return {f for f in folder.iterdir() if f.is_file() and f.suffix not in (".py", ".pyc")}
 
 
 def module_file(name: str, src: Path = SRC) -> Path | None:
@@ -99,8 +96,7 @@ def _closure(script: Path, src: Path) -> tuple[Path, ...]:
             if path is not None and path not in seen:
                 seen.add(path)
                 todo.append(path)
-    folders = {p.parent for p in seen}
-    data = {d for pattern in package_data() for d in (src / "impact").glob(pattern) if d.parent in folders}
+    data = set().union(*(data_files(folder) for folder in {p.parent for p in seen}))
     return tuple(sorted(seen | data))
 
 

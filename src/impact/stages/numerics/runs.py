@@ -1,22 +1,5 @@
-"""Numerics shown, not assumed: error against run time, and stability on extreme cases.
-
-Work-precision: every integrator (the exact core and the baselines of
-:mod:`impact.baselines`) runs the same cases over a ladder of its own setting
-(tolerance, step, contact stiffness); its errors are measured against the
-exact core, and its wall time is the minimum of several repeats after a
-warm-up (one timed run is enough for a run longer than a second).  Every run
-has a budget: over it, the run is recorded as failed, "too slow at this
-setting".  The work splits into one piece per case and method family
-(:data:`FAMILIES`), which the workflow runs as parallel jobs and
-:func:`combine_work_precision` joins.  For the irregular (chaotic) case the predictability horizon is
-measured first (runs perturbed at round-off diverge) and errors are compared
-only inside it.
-
-Stability: every method on extreme inputs (e -> 0 and 1, gap -> 0, no or tiny
-damping, extreme mass ratios, a very stiff pendulum, grazing forcing, large
-friction): finished or failed, finite or not, penetration, impacts per
-period, wall time.  A baseline's failure is recorded, never hidden.
-"""
+"""The numerics stage's runs: every integrator timed against the exact engine, and the stiff and extreme
+cases."""
 
 from __future__ import annotations
 
@@ -31,45 +14,23 @@ import xarray as xr
 
 from impact.baselines import simulate_ivp, simulate_moreau_jean, simulate_penalty, simulate_rk4
 from impact.engine.paper import simulate
-from impact.model.params import Protocol, System, a_max
+from impact.model.params import Protocol, System
 from impact.outputs.labels import TOO_SLOW
-
-K_IMPACTS = 20
-# methods that differ only in a setting or a solver option run as one piece of work
-FAMILIES = ("core", "ivp", "rk4", "moreau_jean", "penalty")
-ONE_REPEAT_ABOVE = 1.0  # s: a run this long is timed once; shorter runs keep the minimum of the repeats
-DEFAULT_BUDGET = 10.0  # s per run (the configuration's numerics.budget)
-
-
-def family(method: str) -> str:
-    """The family of a method: ivp for every solve_ivp method, else the method itself."""
-    return "ivp" if method.startswith("ivp_") else method
-
-
-# --------------------------------------------------------------------------- cases and methods
-
-def work_precision_cases(cfg: dict) -> dict:
-    """Name -> (system, r, start, natural periods) of the work-precision cases."""
-    paper = dict(mu=0.01, beta=0.0048, e=0.25)
-    periods = float(cfg.get("periods", 40))
-    return {
-        "cid_2eipc": (System.from_gap_ratio("cid", gap_ratio=1.6, **paper), 1.0, "left", periods),
-        "cid_irregular": (System.from_gap_ratio("cid", mu=0.01, beta=0.0048, e=0.65, gap_ratio=0.5), 0.97,
-                          "centre", periods),
-        "pid_tuned": (System.from_gap_ratio("pid", gap_ratio=1.0, rp=1.0, **paper), 1.0, "centre", periods),
-        "cid_friction": (System.from_gap_ratio("cid", gap_ratio=1.6, nu=0.05, **paper), 1.0, "left", periods),
-    }
-
-
-def method_ladders(cfg: dict) -> dict:
-    """Method -> (setting name, list of settings), from the configuration."""
-    ladders = {"core": ("exact", [0.0])}
-    for method in cfg.get("ivp_methods", ["RK45", "DOP853", "Radau", "LSODA"]):
-        ladders[f"ivp_{method}"] = ("rtol", list(cfg.get("rtol", [1e-4, 1e-6, 1e-8, 1e-10])))
-    ladders["rk4"] = ("steps_per_period", list(cfg.get("steps_per_period", [50, 100, 200, 400])))
-    ladders["moreau_jean"] = ("steps_per_period", list(cfg.get("steps_per_period", [50, 100, 200, 400])))
-    ladders["penalty"] = ("stiffness", list(cfg.get("stiffness", [1e3, 1e4, 1e5])))
-    return ladders
+from impact.stages.numerics.plan import (
+    K_IMPACTS,
+    ONE_REPEAT_ABOVE,
+    Timeout,
+    budget,
+    extreme_cases,
+    family,
+    method_ladders,
+    stability_methods,
+    work_precision_cases,
+)
+from impact.stages.numerics.tables import (
+    _outcome,
+    stability_table,
+)
 
 
 def run_method(method: str, setting: float, system: System, r: float, start: str, t_end: float, t_window: float):
@@ -97,9 +58,6 @@ def run_method(method: str, setting: float, system: System, r: float, start: str
             "amplitude": out.amplitude, "nfev": out.nfev, "impacts": len(out.impact_times),
             "max_penetration": out.max_penetration, "energy_residual": math.nan, "status": out.status}
 
-
-class Timeout(Exception):
-    pass
 
 
 def _on_alarm(signum, frame):
@@ -141,12 +99,6 @@ def timed_repeats(fun, limit: float, repeats: int):
     return best, out
 
 
-def budget(cfg: dict) -> float:
-    return float(cfg.get("budget", DEFAULT_BUDGET))
-
-
-# --------------------------------------------------------------------------- error measures
-
 def predictability_horizon(system: System, r: float, start: str, t_max: float, threshold: float = 1e-3) -> float:
     """Time after which runs perturbed at round-off (1e-15) differ by more than threshold * amplitude."""
     base = simulate(system, r, Protocol(periods=t_max / (2 * math.pi), average_from=0.0, start=start), record=200000)
@@ -178,8 +130,6 @@ def errors(run: dict, ref: dict, k: int = K_IMPACTS) -> dict:
         "impact_count_differs": int(run["impacts"] != ref["impacts"]),
     }
 
-
-# --------------------------------------------------------------------------- work-precision
 
 def work_precision(cfg: dict, cases=None, families=None, log=None) -> xr.Dataset:
     """Every method of `families` (default: all) on `cases` (default: all), as a dataset.
@@ -255,108 +205,6 @@ def work_precision(cfg: dict, cases=None, families=None, log=None) -> xr.Dataset
     return ds
 
 
-WORK_PRECISION_ATTRS = ("reference", "k_impacts", "wall_time", "repeats", "budget_seconds")
-
-
-def _outcome(out) -> str:
-    if isinstance(out, Exception):
-        return f"failed: {out}" if isinstance(out, Timeout) else f"failed: {type(out).__name__}: {str(out)[:120]}"
-    return "ok" if out["status"] == "ok" and np.isfinite(out["amplitude"]) else str(out["status"])
-
-
-def combine_work_precision(parts, cfg: dict) -> xr.Dataset:
-    """The pieces of one study (each some cases and some families) as one dataset, in the study's order."""
-    parts = list(parts)
-    ds = xr.merge(parts, compat="no_conflicts", join="outer", combine_attrs="override")
-    ds.attrs = {k: v for k, v in parts[0].attrs.items() if k in WORK_PRECISION_ATTRS}  # not a piece's provenance
-    return ds.reindex(case=list(work_precision_cases(cfg)), integrator=list(method_ladders(cfg)))
-
-
-def work_precision_pieces(cfg: dict) -> list[tuple[str, str]]:
-    """(case, family) of every piece of work of the study."""
-    families = {family(m) for m in method_ladders(cfg)}
-    return [(case, fam) for case in work_precision_cases(cfg) for fam in FAMILIES if fam in families]
-
-
-def speed_at_equal_error(ds: xr.Dataset, error: str = "amplitude_error") -> pd.DataFrame:
-    """Per case: the core's time and error, and the fastest baseline setting at least as accurate."""
-    rows = []
-    for case in ds["case"].values:
-        core_t = float(ds["wall_time"].sel(case=case, integrator="core", setting=0))
-        core_e = float(ds[error].sel(case=case, integrator="core", setting=0))
-        best = (math.inf, None, math.nan)
-        closest = (math.inf, None, math.nan, math.nan)
-        for method in ds["integrator"].values:
-            if method == "core":
-                continue
-            for s in ds["setting"].values:
-                t = float(ds["wall_time"].sel(case=case, integrator=method, setting=s))
-                e = float(ds[error].sel(case=case, integrator=method, setting=s))
-                if not (math.isfinite(t) and math.isfinite(e)):
-                    continue
-                label = f"{method} {float(ds['setting_value'].sel(integrator=method, setting=s)):g}"
-                if e <= max(core_e, 1e-12) and t < best[0]:
-                    best = (t, label, e)
-                if e < closest[2] or not math.isfinite(closest[2]):
-                    closest = (t, label, e, t)
-        rows.append({"case": str(case), "core_seconds": core_t, "core_error": core_e,
-                     "fastest_baseline_at_equal_error": best[1], "its_seconds": best[0], "its_error": best[2],
-                     "speed_ratio_at_equal_error": best[0] / core_t if best[1] else math.nan,
-                     "most_accurate_baseline": closest[1], "its_best_error": closest[2],
-                     "its_best_seconds": closest[3],
-                     "speed_ratio_vs_most_accurate": closest[3] / core_t if closest[1] else math.nan})
-    return pd.DataFrame(rows)
-
-
-# --------------------------------------------------------------------------- stability
-
-def extreme_cases(cfg: dict) -> dict:
-    """Name -> (system, r, start) of the stiff and extreme cases (those named in cfg's stability_cases, if
-    given)."""
-    cases = _all_extreme_cases()
-    chosen = cfg.get("stability_cases")
-    if chosen is None:
-        return cases
-    unknown = sorted(set(chosen) - set(cases))
-    if unknown:
-        raise ValueError(f"numerics.stability_cases: unknown case(s) {unknown}; allowed: {list(cases)}")
-    return {name: case for name, case in cases.items() if name in chosen}
-
-
-def _all_extreme_cases() -> dict:
-    base = dict(mu=0.01, beta=0.0048, e=0.25)
-
-    def cid(**kw):
-        g = kw.pop("gap_ratio", 1.0)
-        return System.from_gap_ratio("cid", gap_ratio=g, **{**base, **kw})
-
-    amax = a_max(0.0048, 0.096)
-    bare = 0.096 / math.hypot(1 - 0.95 ** 2, 2 * 0.0048 * 0.95)  # bare amplitude at r = 0.95
-    return {
-        "e=0": (cid(e=0.0), 1.0, "centre"),
-        "e=1e-3": (cid(e=1e-3), 1.0, "centre"),
-        "e=0.999": (cid(e=0.999), 1.0, "centre"),
-        "e=1": (cid(e=1.0), 1.0, "centre"),
-        "g=1e-3": (cid(gap_ratio=1e-3), 1.0, "centre"),
-        "g=1e-6": (cid(gap_ratio=1e-6), 1.0, "centre"),
-        "beta=0": (System("cid", mu=0.01, beta=0.0, e=0.25, gap=1.0), 0.97, "centre"),
-        "beta=1e-5": (System("cid", mu=0.01, beta=1e-5, e=0.25, gap=1.0), 1.0, "centre"),
-        "mu=1e-4": (cid(mu=1e-4), 1.0, "centre"),
-        "mu=0.5": (cid(mu=0.5), 1.0, "centre"),
-        "stiff pendulum r'=100": (System.from_gap_ratio("pid", gap_ratio=1e-3, rp=100.0, **base), 1.0, "left"),
-        # the damper mass rests against the left wall and the structure's steady swing
-        # just reaches the right wall: grazing contact
-        "grazing": (System("cid", mu=1e-6, beta=0.0048, e=0.5, gap=2 * bare * (1 + 1e-9)), 0.95, "centre"),
-        "friction nu=5": (cid(nu=5.0, gap_ratio=1.6), 1.0, "left"),
-    } | ({} if amax else {})
-
-
-def stability_methods(cfg: dict) -> dict:
-    """One mid-range setting per method for the stability table."""
-    return {"core": 0.0, "ivp_RK45": 1e-8, "ivp_DOP853": 1e-8, "ivp_Radau": 1e-8, "ivp_LSODA": 1e-8,
-            "rk4": 200, "moreau_jean": 200, "penalty": 1e5} | cfg.get("stability_settings", {})
-
-
 def stability_runs(cfg: dict, families=None, log=None) -> pd.DataFrame:
     """Every method of `families` (default: all) on every extreme case, one row per run, not yet judged."""
     periods = float(cfg.get("stability_periods", 50))
@@ -386,55 +234,6 @@ def stability_runs(cfg: dict, families=None, log=None) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def stability_table(parts, cfg: dict) -> pd.DataFrame:
-    """The runs of every family, case by case in the study's order, judged (:func:`judge_stability`)."""
-    cases = extreme_cases(cfg)
-    order = {name: i for i, name in enumerate(cases)}
-    methods = {name: i for i, name in enumerate(stability_methods(cfg))}
-    runs = pd.concat(list(parts), ignore_index=True)
-    runs = runs.iloc[sorted(range(len(runs)), key=lambda i: (order[runs["case"].iloc[i]],
-                                                             methods[runs["method"].iloc[i]]))]
-    return judge_stability(runs.reset_index(drop=True), {case: system.gap for case, (system, _, _) in cases.items()})
-
-
 def stability(cfg: dict, log=None) -> pd.DataFrame:
     """Every method on every extreme case, judged: the stability table in one piece."""
     return stability_table([stability_runs(cfg, log=log)], cfg)
-
-
-def stability_families(cfg: dict) -> list[str]:
-    """The families of the stability table's methods, one piece of work each."""
-    present = {family(m) for m in stability_methods(cfg)}
-    return [fam for fam in FAMILIES if fam in present]
-
-
-# a run is ok when it finished with a finite state, kept out of the walls and agreed with the exact core
-OK_PENETRATION = 1e-6  # largest penetration beyond a wall, over the gap
-OK_AMPLITUDE = 1e-3    # amplitude's relative difference from the core's
-
-
-def judge_stability(table: pd.DataFrame, gaps: dict) -> pd.DataFrame:
-    """Add penetration_over_gap, amplitude_error (against the core's run of the case) and ok.
-
-    ok means finished and within tolerance: penetration <= OK_PENETRATION of the gap and amplitude
-    within OK_AMPLITUDE of the core's.  A run that finishes but sinks 0.3 units into a wall is not ok.
-    Where the core itself gave no amplitude (it failed or hit its event cap) there is nothing to compare
-    with: amplitude_error is NaN and only the penetration is judged.
-    """
-    table = table.copy()
-    for column in ("amplitude", "max_penetration"):  # absent when every run failed
-        if column not in table:
-            table[column] = np.nan
-    core = table[table["method"] == "core"].set_index("case")["amplitude"]
-    pen = table["max_penetration"].astype(float)
-    gap = table["case"].map(gaps).astype(float)
-    ratio = np.where(pen <= 0.0, 0.0, pen / gap.where(gap > 0.0, np.nan))
-    table["penetration_over_gap"] = np.where(np.isnan(ratio) & (pen > 0.0), np.inf, ratio)
-    amp = table["amplitude"].astype(float)
-    ref = table["case"].map(core).astype(float)
-    table["amplitude_error"] = (amp - ref).abs() / ref.abs()
-    finished = (table["status"] == "ok") & table["finite"].fillna(False).astype(bool)
-    near_core = (table["amplitude_error"] <= OK_AMPLITUDE) | ref.isna()
-    within = (table["penetration_over_gap"] <= OK_PENETRATION) & near_core
-    table["ok"] = finished & within
-    return table

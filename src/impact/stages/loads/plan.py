@@ -1,0 +1,135 @@
+"""The earthquake and wind study's plan: its buildings, dampers and loads, from the configuration.
+Nothing here runs the engine, so the workflow's start-up reads it without loading numba."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from impact.closed_form.tmd import den_hartog
+from impact.model.building import Building
+from impact.model.params import G_GRAV, ParameterError
+from impact.model.records import kanai_tajimi, load_record, narrow_band_force
+from impact.model.scene import Damper, ForceRecord, GroundMotion
+
+FAMILIES = ("records", "kanai_tajimi", "wind")
+
+
+# the responses judged against the bare building: measure -> the SceneResult attribute
+RESPONSES = {"peak_roof": "peak_roof_displacement", "rms_roof": "rms_roof_displacement",
+             "peak_accel": "peak_roof_acceleration", "peak_drift": "peak_interstorey_drift"}
+
+
+IMPACT_RECORDS = 50_000   # impacts whose momentum is kept per run (more are counted, not kept)
+
+
+SAME = 0.05               # a ratio within 5 % of 1: the damper "does nothing"
+
+
+def building_id(storeys: int, period_s: float) -> str:
+    return f"s{int(storeys)}_T{period_s:g}"
+
+
+def buildings(cfg: dict) -> dict:
+    """id -> (storeys, period) of every building of the stage."""
+    return {building_id(n, t): (n, t) for n in cfg["storeys"] for t in cfg["periods_s"]}
+
+
+def make_building(cfg: dict, building: str) -> Building:
+    storeys, period = buildings(cfg)[building]
+    return Building.uniform(storeys, period, cfg["zeta"])
+
+
+def first_modal_mass(building: Building) -> float:
+    """The first mode's modal mass with the mode shape scaled to 1 at the roof."""
+    _, phi = building.modes()
+    shape = phi[:, 0] / phi[-1, 0]
+    return float(shape @ (building.masses * shape))
+
+
+def tmd_damper(building: Building, mass_ratio: float) -> Damper:
+    """A TMD of mass_ratio x the building's mass on the roof, Den Hartog-tuned to the first mode."""
+    mass = mass_ratio * building.total_mass
+    tuning = den_hartog(mass / first_modal_mass(building))
+    return Damper("tmd", mass=mass, tuning=tuning["f"], damping=tuning["beta_t"])
+
+
+def impact_damper(kind: str, building: Building, mass_ratio: float, gap: float, e: float) -> Damper:
+    return Damper(kind, mass=mass_ratio * building.total_mass, gap=gap, e=e, tuning=1.0 if kind == "pid" else 0.0)
+
+
+@dataclass(frozen=True)
+class Load:
+    """One load of the stage: its family, its labels in the datasets, and the scene load."""
+
+    family: str
+    labels: dict
+    load: object
+    duration: float | None = None
+
+
+def real_loads(cfg: dict) -> list[Load]:
+    recs = {name: load_record(name) for name in cfg["records"]["names"]}
+    return [Load("records", {"record": name, "intensity": pga}, GroundMotion.from_record(rec, pga_g=pga))
+            for name, rec in recs.items() for pga in cfg["records"]["pga_g"]]
+
+
+def kt_record(cfg: dict, soil: str, seed: int):
+    kt = cfg["kanai_tajimi"]
+    return kanai_tajimi(seed, kt["duration_s"], kt["dt_s"], soil=soil, pga_g=1.0,
+                        envelope_params=(kt["rise_s"], kt["plateau_end_s"], kt["decay_per_s"]))
+
+
+def random_loads(cfg: dict) -> list[Load]:
+    kt, out = cfg["kanai_tajimi"], []
+    for soil in kt["soils"]:
+        for seed in range(kt["seeds"]):
+            rec = kt_record(cfg, soil, seed)
+            out += [Load("kanai_tajimi", {"soil": soil, "seed": seed, "intensity": pga},
+                         GroundMotion.from_record(rec, pga_g=pga)) for pga in cfg["records"]["pga_g"]]
+    return out
+
+
+def wind_loads(cfg: dict, building: Building) -> list[Load]:
+    """The narrow-band random force on every floor, centred on the first mode (rms: a share of each floor's weight)."""
+    w = cfg["wind"]
+    dt = w["dt_periods"] * building.period1
+    duration = w["duration_periods"] * building.period1
+    out = []
+    for seed in range(w["seeds"]):
+        values = narrow_band_force(seed, duration, dt, building.omega1, bandwidth=w["bandwidth"],
+                                   rms=w["rms_weight_share"] * G_GRAV)
+        out.append(Load("wind", {"seed": seed}, ForceRecord(values, dt, building.masses.copy(), name=f"wind-{seed}"),
+                        duration))
+    return out
+
+
+def stage_loads(cfg: dict, building_name: str, building: Building) -> list[Load]:
+    loads = real_loads(cfg) + random_loads(cfg)
+    if building_name in cfg["wind"]["buildings"]:
+        loads += wind_loads(cfg, building)
+    return loads
+
+
+def check_config(cfg: dict) -> None:
+    """Checks of the loads section a JSON schema cannot express; the message names the key."""
+    names = buildings(cfg)
+    if cfg["records"]["design_pga_g"] not in cfg["records"]["pga_g"]:
+        raise ParameterError(f"loads.records.design_pga_g = {cfg['records']['design_pga_g']} must be one of "
+                             f"loads.records.pga_g = {cfg['records']['pga_g']}")
+    for b in cfg["wind"]["buildings"]:
+        if b not in names:
+            raise ParameterError(f"loads.wind.buildings: {b!r} is not a building of the stage ({', '.join(names)})")
+    th = cfg["time_history"]
+    if th["building"] not in names:
+        raise ParameterError(f"loads.time_history.building = {th['building']!r} is not a building of the stage "
+                             f"({', '.join(names)})")
+    if th["mass_ratio"] not in cfg["mass_ratios"]:
+        raise ParameterError(f"loads.time_history.mass_ratio = {th['mass_ratio']} must be one of "
+                             f"loads.mass_ratios = {cfg['mass_ratios']}")
+    if th["record"] not in cfg["records"]["names"]:
+        raise ParameterError(f"loads.time_history.record = {th['record']!r} must be one of loads.records.names")
+
+
+def families(cfg: dict) -> list[str]:
+    """The load families the stage runs (the wind only when it loads a building)."""
+    return [f for f in FAMILIES if f != "wind" or cfg["wind"]["buildings"]]
