@@ -14,7 +14,7 @@ import math
 import os
 import sys
 
-from impact.model.params import IPC_CLASSES, STARTS, ParameterError, Protocol, System, ipc_class
+from impact.model.params import STARTS, ParameterError, Protocol, System, ipc_label
 
 DEFAULTS = dict(mu=0.01, beta=0.0048, e=0.25, gap_ratio=1.0, force_ratio=0.096)
 
@@ -110,7 +110,7 @@ def cmd_run(args) -> dict:
            "a_max": system.a_max, "r": args.r, "amplitude": res.amplitude,
            "amplitude_ratio": res.amplitude / system.a_max, "loop": res.loop}
     if args.units == 1:
-        out.update(aipc=aipc, ipc_class=IPC_CLASSES[ipc_class(aipc)] if ipc_class(aipc) >= 0 else "undefined")
+        out.update(aipc=aipc, ipc_class=ipc_label(aipc))
     else:
         out["aipc_per_unit"] = aipc
     out["diagnostics"] = res.diagnostics

@@ -18,7 +18,7 @@ from impact.engine import paper_loop as K
 from impact.engine.contact import STICK_VELOCITY
 from impact.engine.diagnostics import read_diagnostics
 from impact.engine.jitcache import compile_lock
-from impact.model.params import IPC_CLASSES, Protocol, System, ipc_class
+from impact.model.params import Protocol, System, ipc_class, ipc_label
 
 _WARM: set = set()
 FREE_FLIGHT = K.contact_code(K.MODE_FREE, 0, 0)
@@ -122,7 +122,7 @@ class RunResult:
             "amplitude": self.amplitude,
             "amplitude_ratio": self.amplitude_ratio,
             "aipc": self.aipc,
-            "ipc_class": IPC_CLASSES[self.ipc_class] if self.ipc_class >= 0 else "undefined",
+            "ipc_class": ipc_label(self.aipc),
             "diagnostics": self.diagnostics,
         }
         return out
@@ -161,12 +161,16 @@ def _run_kernel(system, r, protocol, z0, code, record, t0=0.0) -> "RunResult":
     return _result(system, r, protocol, diag, z_out, final, rec)
 
 
+def window_amplitude(diag, t_window: float) -> tuple[float, float, bool]:
+    """(amplitude sqrt(2) RMS of x over the window, the window's span, whether the run completed it) from a
+    paper-loop run's diagnostics: the one place this is computed, so every caller gets the same bits."""
+    span = diag[K.D_TEND] - t_window
+    complete = bool(not diag[K.D_CAP] and span > 0)
+    return (math.sqrt(2.0 * diag[K.D_X2WIN] / span) if complete else math.nan), span, complete
+
+
 def _result(system, r, protocol, diag, z_out, final, rec) -> RunResult:
-    t_win = protocol.t_window
-    t_end = diag[K.D_TEND]
-    span = t_end - t_win
-    complete = not diag[K.D_CAP] and span > 0
-    amp = math.sqrt(2.0 * diag[K.D_X2WIN] / span) if complete else math.nan
+    amp, span, complete = window_amplitude(diag, protocol.t_window)
     cycles = span * r / (2.0 * math.pi)
     aipc = diag[K.D_IMPACTS_WIN] / cycles if complete else math.nan
     records = None

@@ -79,11 +79,8 @@ def _run_paper(scene: Scene, measures: frozenset, record: int, times) -> SceneRe
     diag = np.zeros(K.NDIAG)
     z_out = np.zeros(4)
     K.run(p, z0, int(code), paper.pid_data(system, r), fric, np.zeros((0, K.NREC)), diag, z_out)
-    span = diag[K.D_TEND] - scene.t_window
-    complete = not diag[K.D_CAP] and span > 0
+    amp, span, complete = paper.window_amplitude(diag, scene.t_window)
     nan = math.nan
-    # the amplitude as the paper loop's own runs compute it (engine.paper), to the last bit
-    amp = math.sqrt(2.0 * diag[K.D_X2WIN] / span) if complete else nan
     return SceneResult(
         scene=scene, peak_roof_displacement=nan, peak_roof_displacement_time=nan,
         rms_roof_displacement=math.sqrt(diag[K.D_X2WIN] / span) if complete else nan,

@@ -185,6 +185,12 @@ def ipc_class(aipc: float) -> int:
     return 3
 
 
+def ipc_label(aipc: float) -> str:
+    """The IPC class's name (IPC_CLASSES), or 'undefined'."""
+    cls = ipc_class(aipc)
+    return IPC_CLASSES[cls] if cls >= 0 else "undefined"
+
+
 def _fmt(x: float) -> str:
     return f"{x:g}"
 
