@@ -356,7 +356,10 @@ def test_cli_quake_prints_the_measures_and_refuses_bad_flags(capsys):
     assert abs(out["diagnostics"]["energy_residual"]) <= 1e-9
     for argv, flag in ((["--zeta", "1.5"], "--zeta"), (["--storeys", "0"], "--storeys"),
                        (["--floor", "5", "--damper", "cid", "--gap-m", "0.1"], "--floor"),
-                       (["--damper", "cid"], "--gap-m")):
+                       (["--damper", "cid"], "--gap-m"),
+                       (["--damper", "tmd", "--gap-m", "0.1"], "--gap-m"),
+                       (["--damper", "cid", "--gap-m", "0.1", "--tuning", "3"], "--tuning"),
+                       (["--mu", "0.05"], "--mu")):
         with pytest.raises(SystemExit) as exc:
             main(["quake", "--record", "elcentro", "--storeys", "3", *argv])
         assert exc.value.code == 2

@@ -14,7 +14,7 @@ import math
 import os
 import sys
 
-from impact.model.params import STARTS, ParameterError, Protocol, System, ipc_label
+from impact.model.params import MAX_TUNING, STARTS, ParameterError, Protocol, System, ipc_label
 
 DEFAULTS = dict(mu=0.01, beta=0.0048, e=0.25, gap_ratio=1.0, force_ratio=0.096)
 
@@ -131,6 +131,25 @@ def _quake_record(args):
                         envelope_params=(2.0, 0.5 * duration, 0.5))
 
 
+#: impact quake's damper flags: which each --damper kind uses, and the value of one not given
+QUAKE_DAMPER_FLAGS = {"none": (), "cid": ("mu", "gap_m", "e", "nu", "units", "floor", "start"),
+                      "pid": ("mu", "gap_m", "e", "rp", "damping", "units", "floor", "start"),
+                      "tmd": ("mu", "tuning", "damping", "units", "floor")}
+QUAKE_DEFAULTS = dict(mu=0.02, e=0.5, rp=1.0, tuning=1.0, damping=0.0, nu=0.0, units=1, start="centre")
+
+
+def _quake_damper_flags(args) -> dict:
+    """The damper flags of --damper's kind, defaults filled in; a flag its kind does not use is refused."""
+    uses = QUAKE_DAMPER_FLAGS[args.damper]
+    for name in sorted({flag for kind_flags in QUAKE_DAMPER_FLAGS.values() for flag in kind_flags}):
+        if getattr(args, name) is not None and name not in uses:
+            users = [kind for kind, flags in QUAKE_DAMPER_FLAGS.items() if name in flags]
+            raise ParameterError(f"--{name.replace('_', '-')} is not used by --damper {args.damper}: "
+                                 f"it is a flag of --damper {' or '.join(users)}")
+    return {name: getattr(args, name) if getattr(args, name) is not None else QUAKE_DEFAULTS.get(name)
+            for name in uses}
+
+
 def cmd_quake(args) -> dict:
     """A shear building under a ground-motion record, with or without a damper at one floor."""
     from impact.engine.scenes import simulate_scene
@@ -141,16 +160,17 @@ def cmd_quake(args) -> dict:
     building = Building.uniform(args.storeys, args.period_s, args.zeta, floor_mass=args.floor_mass_kg)
     if args.floor is not None and args.floor > args.storeys:
         raise ParameterError(f"--floor = {args.floor} is out of range: allowed [1, --storeys = {args.storeys}]")
+    flags = _quake_damper_flags(args)
     dampers = ()
     if args.damper != "none":
         if args.damper != "tmd" and args.gap_m is None:
             raise ParameterError(f"--gap-m is required for --damper {args.damper}")
-        tuning = args.rp if args.damper == "pid" else args.tuning
-        dampers = (Damper(args.damper, mass=args.mu * building.total_mass, floor=args.floor,
-                          gap=args.gap_m if args.damper != "tmd" else 0.0, e=args.e, tuning=tuning,
-                          damping=args.damping, nu=args.nu, units=args.units),)
+        dampers = (Damper(args.damper, mass=flags["mu"] * building.total_mass, floor=args.floor,
+                          gap=flags.get("gap_m", 0.0), e=flags.get("e", 0.0),
+                          tuning=flags.get("rp", flags.get("tuning", 1.0)), damping=flags.get("damping", 0.0),
+                          nu=flags.get("nu", 0.0), units=flags["units"]),)
     load = GroundMotion.from_record(record, pga_g=args.pga_g)
-    scene = Scene(building, dampers, load, duration=args.duration_s, start=args.start)
+    scene = Scene(building, dampers, load, duration=args.duration_s, start=flags.get("start", "centre"))
     res = simulate_scene(scene)
     out = {"record": {"name": record.name, "source": record.source, "dt_s": record.dt, "npts": record.npts,
                       "pga_g": load.pga / 9.80665},
@@ -296,22 +316,28 @@ def build_parser() -> argparse.ArgumentParser:
     qk.add_argument("--floor-mass-kg", type=_ranged(0, 1e15, lo_open=True), default=1.0e5,
                     help="mass of each floor in kg (only ratios matter to the response)")
     qk.add_argument("--damper", choices=("none", "cid", "pid", "tmd"), default="none", help="the damper")
-    qk.add_argument("--mu", type=_ranged(0, 10, lo_open=True), default=0.02,
-                    help="damper mass over the building's total mass, in (0, 10]")
+    qk.add_argument("--mu", type=_ranged(0, 10, lo_open=True), default=None,
+                    help=f"damper mass over the building's total mass, in (0, 10] (default {QUAKE_DEFAULTS['mu']})")
     qk.add_argument("--gap-m", type=_ranged(0, 1e3), default=None, help="total clearance d in metres (CID, PID)")
-    qk.add_argument("--e", type=_ranged(0, 1), default=0.5, help="coefficient of restitution, in [0, 1]")
-    qk.add_argument("--rp", type=_ranged(0, 1e4, lo_open=True), default=1.0,
-                    help="PID tuning: pendulum frequency over the building's fundamental, in (0, 1e4]")
-    qk.add_argument("--tuning", type=_ranged(0, 1e4, lo_open=True), default=1.0,
-                    help="TMD tuning f: its frequency over the building's fundamental, in (0, 1e4]")
-    qk.add_argument("--damping", type=_ranged(0, 1, hi_open=True), default=0.0,
-                    help="damping ratio of the TMD, or of the PID's pendulum, in [0, 1)")
-    qk.add_argument("--nu", type=_ranged(0, 100), default=0.0, help="Coulomb friction under a CID, in [0, 100]")
-    qk.add_argument("--units", type=_ranged(1, 60, kind=int), default=1,
-                    help="split the damper into N identical units, in [1, 60]")
+    qk.add_argument("--e", type=_ranged(0, 1), default=None,
+                    help=f"coefficient of restitution (CID, PID), in [0, 1] (default {QUAKE_DEFAULTS['e']})")
+    qk.add_argument("--rp", type=_ranged(0, MAX_TUNING, lo_open=True), default=None,
+                    help=f"PID tuning: pendulum frequency over the building's fundamental, in (0, {MAX_TUNING:g}] "
+                         f"(default {QUAKE_DEFAULTS['rp']})")
+    qk.add_argument("--tuning", type=_ranged(0, MAX_TUNING, lo_open=True), default=None,
+                    help=f"TMD tuning f: its frequency over the building's fundamental, in (0, {MAX_TUNING:g}] "
+                         f"(default {QUAKE_DEFAULTS['tuning']})")
+    qk.add_argument("--damping", type=_ranged(0, 1, hi_open=True), default=None,
+                    help=f"damping ratio of the TMD, or of the PID's pendulum, in [0, 1) "
+                         f"(default {QUAKE_DEFAULTS['damping']})")
+    qk.add_argument("--nu", type=_ranged(0, 100), default=None,
+                    help=f"Coulomb friction under a CID, in [0, 100] (default {QUAKE_DEFAULTS['nu']})")
+    qk.add_argument("--units", type=_ranged(1, 60, kind=int), default=None,
+                    help=f"split the damper into N identical units, in [1, 60] (default {QUAKE_DEFAULTS['units']})")
     qk.add_argument("--floor", type=_ranged(1, 200, kind=int), default=None,
                     help="floor the damper is attached to, 1 to --storeys (default: the roof)")
-    qk.add_argument("--start", choices=STARTS, default="centre", help="damper mass's initial place")
+    qk.add_argument("--start", choices=STARTS, default=None,
+                    help=f"a CID's or PID's mass's initial place (default {QUAKE_DEFAULTS['start']})")
     qk.add_argument("--duration-s", type=_ranged(0, 1e6, lo_open=True), default=None,
                     help="simulated time in seconds (default: the record's length)")
     qk.add_argument("--json", action="store_true", help="print one JSON object (the only output format)")

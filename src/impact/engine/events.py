@@ -26,6 +26,8 @@ HMIN = 1e-12       # smallest step before a touch is declared tangential
 _EPS = 2.220446049250313e-16
 PEAK_RTOL = 1e-12  # the peak search stops refining an interval within this of the running peak
 PEAK_MAX_VISITS = 100000  # a function of pure round-off could split forever: give up, and say so
+PEAK_VISITS_PER_EXTREMUM = 64  # ... but not before a long segment of a fast mode had this many visits per extremum
+PEAK_NOISE = 64 * _EPS  # the round-off of evaluating a row, relative to the sum of its terms' sizes
 
 
 @njit(cache=True)
@@ -34,6 +36,7 @@ def _newton_in_bracket(kap, c, p, level, side, a, b, t, of_slope, iterations):
 
     Returns the last iterate and the bracket end with g >= 0.
     """
+    g_before = np.nan
     for _ in range(iterations):
         if of_slope:
             _, f, df = eval3(kap, c, p, t)
@@ -50,6 +53,11 @@ def _newton_in_bracket(kap, c, p, level, side, a, b, t, of_slope, iterations):
         tn = t - g / dg if dg != 0.0 else 0.5 * (a + b)
         if not (a < tn < b):
             tn = 0.5 * (a + b)
+        elif g < 0.0 and g == g_before:
+            # a plateau short of the crossing: where h is a difference of far larger terms it reads the same
+            # over many ulps, Newton creeps across it, and b, the answer, would stay where the bracket began
+            tn = 0.5 * (a + b)
+        g_before = g
         if tn == t:
             break
         t = tn
@@ -96,7 +104,10 @@ def _leave_boundary(kap, kpow, c, p, lo, hi, tau_max, escape, delta, out):
     h2 = deriv_at0(kap, c, p, 2)
     h3 = deriv_at0(kap, c, p, 3)
     m4 = bound_tab(kpow, c, p, 4, tau_max)
-    te = _escape_guess(h1, h2, h3, delta)
+    # before this, h cannot reach the far edge (|h - h(0)| <= |h'(0)| t + M2 t^2 / 2): a clearance seen
+    # later could lie beyond it, in a gap the motion crosses faster than the derivatives at 0 suggest
+    te_far = _time_to_travel(hi - lo, abs(h1), bound_tab(kpow, c, p, 2, tau_max))
+    te = min(_escape_guess(h1, h2, h3, delta), te_far)
     last_clear = 0.0
     steps = 0.0
     while True:
@@ -126,9 +137,21 @@ def _leave_boundary(kap, kpow, c, p, lo, hi, tau_max, escape, delta, out):
                 out[2] += 1.0
                 out[3] = steps
                 return -1.0
-        te *= 2.0
+        if te >= te_far:
+            break  # not yet clear: the search goes on from here, where a touch of the edge is a contact
+        te = min(2.0 * te, te_far)
     out[3] = steps
     return te
+
+
+@njit(cache=True)
+def _time_to_travel(width, speed, m2):
+    """The least t with speed t + m2 t^2 / 2 = width: nothing slower covers the width sooner."""
+    if not width < np.inf:
+        return np.inf
+    if m2 <= 0.0:
+        return width / speed if speed > 0.0 else np.inf
+    return 2.0 * width / (speed + math.sqrt(speed * speed + 2.0 * m2 * width))
 
 
 @njit(cache=True, inline='always')
@@ -302,6 +325,24 @@ def _push(stack, top, a, b, da, db):
 
 
 @njit(cache=True)
+def _extrema_bound(kap, big_t):
+    """How many extrema the fastest mode can have over [0, T] (one per half period): the peak search may
+    visit each a few times before a function of pure round-off is the better explanation."""
+    fastest = 0.0
+    for k in range(kap.shape[0]):
+        fastest = max(fastest, abs(kap[k].imag))
+    return 1.0 + fastest * big_t / math.pi
+
+
+@njit(cache=True)
+def _grown(stack):
+    """The peak search's stack with twice the rows, the old ones copied."""
+    bigger = np.empty((2 * stack.shape[0], stack.shape[1]))
+    bigger[:stack.shape[0]] = stack
+    return bigger
+
+
+@njit(cache=True)
 def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
     """max(peak, max |h| over [0, T]), certified to PEAK_RTOL.
 
@@ -310,8 +351,12 @@ def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
     there; around it h'' keeps its sign over a radius |h''| / M3, so h has no
     other extremum there and only the rest needs searching.  An interval where
     h' provably keeps its sign is monotone: its ends hold its extremes.
-    kpow: kappa_powers of kap; ek = exp(kap T); stack: (n, 4) work array.  Returns the new peak and the time where it is
-    attained (-1 if the old peak stands, -2 if the search gave up).
+    Intervals are searched from the segment's start: a decaying transient's
+    largest swing comes first and prunes the rest.
+    kpow: kappa_powers of kap; ek = exp(kap T); stack: (n, 4) work array, grown when a long segment needs more.
+    Returns the new peak, the time where it is attained (-1 if the old peak stands) and whether the search
+    finished (False: it gave up after many visits per extremum the fastest mode can have, and the peak is
+    only a lower bound).
     """
     h0, d0, h1, d1 = _ends(kap, ek, c, p, big_t)
     at = -1.0
@@ -323,15 +368,18 @@ def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
         at = big_t
     m2 = bound_tab(kpow, c, p, 2, big_t)
     if max(abs(h0), abs(h1)) + m2 * big_t * big_t / 8.0 <= peak * (1.0 + PEAK_RTOL):
-        return peak, at
+        return peak, at, True
     m3 = bound_tab(kpow, c, p, 3, big_t)
+    # h is a sum of terms of this size: a swing within its round-off of the peak cannot be told from it
+    # (a row that cancels to round-off, a TMD's stroke of 1e-17 m, would otherwise be split to hmin)
+    noise = PEAK_NOISE * bound_tab(kpow, c, p, 0, big_t)
     top = _push(stack, 0, 0.0, big_t, d0, d1)
     hmin = max(big_t, 1.0) * 1e-13
     visits = 0
     while top > 0:
         visits += 1
-        if visits > PEAK_MAX_VISITS:
-            return peak, -2.0 if at < 0.0 else at  # the caller flags an uncertified peak
+        if visits > PEAK_MAX_VISITS and visits > PEAK_VISITS_PER_EXTREMUM * _extrema_bound(kap, big_t):
+            return peak, at, False
         top -= 1
         a = stack[top, 0]
         b = stack[top, 1]
@@ -340,12 +388,12 @@ def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
         ha, _ = eval2(kap, c, p, a)
         hb, _ = eval2(kap, c, p, b)
         w = b - a
-        if max(abs(ha), abs(hb)) + m2 * w * w / 8.0 <= peak * (1.0 + PEAK_RTOL) or w <= hmin:
+        if max(abs(ha), abs(hb)) + m2 * w * w / 8.0 <= peak * (1.0 + PEAK_RTOL) + noise or w <= hmin:
             continue
         if (da > 0.0) == (db > 0.0) and min(abs(da), abs(db)) - m3 * w * w / 8.0 > 0.0:
             continue  # monotone: the ends were counted
         if top + 2 >= stack.shape[0]:
-            continue  # depth is bounded by log2(T / hmin); never overflow
+            stack = _grown(stack)  # an interval dropped here would be a maximum never looked at
         if (da > 0.0) != (db > 0.0) and da != 0.0 and db != 0.0:
             tz = _zero_of_derivative(kap, c, p, a, b, da)
             hz, _, ddz = eval3(kap, c, p, tz)
@@ -357,13 +405,14 @@ def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
             right = min(b, tz + rho)
             if left > a:
                 peak, at, dl = _probe(kap, c, p, left, peak, at)
-                top = _push(stack, top, a, left, da, dl)
             if right < b:
                 peak, at, dr = _probe(kap, c, p, right, peak, at)
                 top = _push(stack, top, right, b, dr, db)
+            if left > a:
+                top = _push(stack, top, a, left, da, dl)
             continue
         mid = 0.5 * (a + b)
         peak, at, dmid = _probe(kap, c, p, mid, peak, at)
-        top = _push(stack, top, a, mid, da, dmid)
         top = _push(stack, top, mid, b, dmid, db)
-    return peak, at
+        top = _push(stack, top, a, mid, da, dmid)
+    return peak, at, True

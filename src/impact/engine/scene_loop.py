@@ -114,6 +114,7 @@ from impact.engine.segment import (
 
 EV_NONE, EV_WALL, EV_SLIDE_STOP, EV_RELEASE, EV_FLOOR_EXIT = 0, 1, 2, 3, 4
 _TOL = 1e-12  # contact tolerance, relative to the size of the gap function
+STALL_EVENTS, STALL_SPAN = 1000, 1e-9  # this many events within this fraction of a period: no progress
 
 
 @njit(cache=True, inline='always')
@@ -160,6 +161,20 @@ def _unit_level(j, units, springs, fric):
     if fric is not None:
         level -= fric[j]
     return level
+
+
+@njit(cache=True, inline='always')
+def _still_leaving(j, nf, units, mode, escape, q, v):
+    """Unit j left a wall (escape) and, when the segment ended at another unit's event, is still on it to
+    round-off of its gap and not moving back: it keeps leaving (a search from the wall without its escape
+    would find the touch it is leaving, and two units on opposite walls would trade it forever)."""
+    if escape[j] == 0 or mode[j] != MODE_FREE:
+        return False
+    f = units.floor[j]
+    half = 0.5 * units.gap[j]
+    # to the contact tolerance of the gap and of the positions it is the difference of
+    on_wall = abs(q[nf + j] - q[f] - escape[j] * half) <= _TOL * (units.gap[j] + abs(q[nf + j]) + abs(q[f]))
+    return on_wall and escape[j] * (v[nf + j] - v[f]) <= 0.0
 
 
 @njit(cache=True, inline='always')
@@ -424,10 +439,10 @@ def monitor_modal(s, n, wc, aw, kap, kpow, ek, C, P, tau, t, t_win, monitors, r0
         peak = mon_peak[m]
         if ends > peak or ends + curvature_bound(s, m, n, aw, wt, cm, pm, kpow, tau, harmonic, mtab) * tau * tau / 8.0 \
                 > peak * (1.0 + PEAK_RTOL):
-            peak, at = peak_abs(kap, kpow, ek, cm, pm, tau, peak, stack)
-            if at == -2.0:
+            peak, at, certified = peak_abs(kap, kpow, ek, cm, pm, tau, peak, stack)
+            if not certified:
                 diag[D_PEAK_GAVE_UP] += 1.0
-            elif at >= 0.0:
+            if at >= 0.0:
                 mon_peak[m] = peak
                 mon_peak_t[m] = t + at
 
@@ -489,16 +504,14 @@ def impacts_on_floor(f, building, units, st, events, diag):
         return 0
     imp = np.zeros(n)
     mf = floor_mass(f, building, units, mode)
-    ke0 = 0.5 * mf * v[f] * v[f]
-    for j in range(nu):
-        if group[j] >= 0:
-            ke0 += 0.5 * um[j] * v[nf + j] * v[nf + j]
     solve_impulses(u[:n], minv[:n], sd[:n], e[:n], count[:n], mf, imp)
     dv = 0.0
     for a in range(n):
         dv += sd[a] * count[a] * imp[a]
     v[f] += dv / mf
-    ke1 = 0.5 * mf * v[f] * v[f]
+    # the loss is the impulses' work, sum P_k (u_k- + u_k+) / 2: the kinetic energies before and after
+    # differ by it, but their difference is round-off of the floor's energy at every impact
+    loss = 0.0
     hits = 0
     for j in range(nu):
         g = group[j]
@@ -508,7 +521,7 @@ def impacts_on_floor(f, building, units, st, events, diag):
         if not hit[j] and imp[g] > 0.0:
             # a resting unit that its wall keeps: it moves with its floor, exactly rather than to round-off
             v[nf + j] = v[f]
-        ke1 += 0.5 * um[j] * v[nf + j] * v[nf + j]
+        loss += 0.5 * imp[g] * (u[g] + sd[g] * (v[nf + j] - v[f]))
         impulse_out[j] = imp[g]
         if hit[j]:
             q[nf + j] = q[f] + sd[g] * 0.5 * ud[j]
@@ -516,7 +529,7 @@ def impacts_on_floor(f, building, units, st, events, diag):
     for j in range(nu):
         if ufloor[j] == f and mode[j] == MODE_LOCKED:
             v[nf + j] = v[f]
-    diag[D_IMPLOSS] += ke0 - ke1
+    diag[D_IMPLOSS] += loss
     return hits
 
 
@@ -646,6 +659,7 @@ def resolve_events(tau_ev, building, units, fric, st, events, vstick, diag):
     nf = building.mass.shape[0]
     nu = um.shape[0]
     limit = tau_ev * (1.0 + 16.0 * 2.220446049250313e-16) + 1e-300
+    touched = np.zeros(nu, dtype=np.bool_)
     for j in range(nu):
         hit[j] = False
         impulse[j] = 0.0
@@ -679,9 +693,17 @@ def resolve_events(tau_ev, building, units, fric, st, events, vstick, diag):
             if pen > diag[D_PEN]:
                 diag[D_PEN] = pen
             if sd * (v[nf + j] - v[f]) <= 0.0:
-                # touched within contact tolerance while already separating
+                # touched within contact tolerance while already separating: at a speed below the sticking
+                # one it is resting there (merged below, and the walls decide); else settle judges it as a
+                # rebound, which rests on the wall if it cannot clear the tolerance.  Either way the same
+                # touch is not found again
                 q[nf + j] = q[f] + sd * half
-                escape[j] = sd
+                side[j] = sd
+                if abs(v[nf + j] - v[f]) < vstick:
+                    touched[j] = True
+                else:
+                    escape[j] = sd
+                    check[j] = 1
             else:
                 hit[j] = True
     n_hit = 0
@@ -691,8 +713,18 @@ def resolve_events(tau_ev, building, units, fric, st, events, vstick, diag):
             floors_done[ufloor[j]] = True
             n_hit += impacts_on_floor(ufloor[j], building, units, st, events, diag)
     for j in range(nu):
+        if mode[j] == MODE_STUCK and floors_done[ufloor[j]] and side[j] * (v[nf + j] - v[ufloor[j]]) < 0.0:
+            # its wall moved away under another unit's impact; a separation too slow to resolve
+            # is judged in settle like any slow rebound.  Released before any merge below, which
+            # moves the units still resting on the floor with it
+            mode[j] = MODE_FREE
+            escape[j] = side[j]
+            check[j] = 1
+            if fric is not None:
+                sigma[j] = -side[j]
+    for j in range(nu):
         f = ufloor[j]
-        if hit[j]:
+        if hit[j] or touched[j]:
             side[j] = ev_side[j]
             if fric is not None:
                 sigma[j] = -side[j]
@@ -704,17 +736,20 @@ def resolve_events(tau_ev, building, units, fric, st, events, vstick, diag):
             else:
                 escape[j] = side[j]
                 check[j] = 1
-        elif mode[j] == MODE_STUCK and floors_done[f] and side[j] * (v[nf + j] - v[f]) < 0.0:
-            # its wall moved away under another unit's impact; a separation too slow to resolve
-            # is judged in settle like any slow rebound
-            mode[j] = MODE_FREE
-            escape[j] = side[j]
-            check[j] = 1
-            if fric is not None:
-                sigma[j] = -side[j]
         elif mode[j] == MODE_FLOOR and floors_done[f] and v[nf + j] != v[f]:
             # friction cannot pass on an impulse: the floor slips under the unit
             mode[j] = MODE_FREE
+            sigma[j] = 1 if v[nf + j] > v[f] else -1
+            escape_v[j] = 0
+        elif mode[j] == MODE_FREE and floors_done[f] and escape[j] * (v[nf + j] - v[f]) > 0.0:
+            # leaving a wall, and the floor's jolt drives it back into that wall: no longer leaving, so the
+            # search finds the strike at once rather than after it has passed through the wall
+            escape[j] = 0
+            if fric is not None and fric[j] > 0.0:
+                sigma[j] = 1 if v[nf + j] > v[f] else -1
+                escape_v[j] = 0
+        elif mode[j] == MODE_FREE and fric is not None and floors_done[f] and v[nf + j] != v[f]:
+            # a sliding unit's floor jumped under another unit's impact: friction now opposes the new slip
             sigma[j] = 1 if v[nf + j] > v[f] else -1
             escape_v[j] = 0
     return n_hit
@@ -814,12 +849,22 @@ def move_to_end(nf, building, units, springs, fric, mode, sigma, kap, ek, C, P, 
 
 @njit(cache=True, inline='always')
 def event_cap_reached(t, p, clock):
-    """Count the event in its period (clock = period index, events so far); True past the cap."""
+    """Count the event in its period; True past the cap, or when STALL_EVENTS events in a row took less than
+    STALL_SPAN of a period (a loop that makes no progress: a bug, since chatter is resolved by sticking).
+
+    clock: the period index, its events so far, the time and count of the last stall check.
+    """
     pi_now = math.floor(t / p[P_PERIOD])
     if pi_now != clock[0]:
         clock[0] = pi_now
         clock[1] = 0.0
     clock[1] += 1.0
+    clock[3] += 1.0
+    if clock[3] >= STALL_EVENTS:
+        if t - clock[2] < STALL_SPAN * p[P_PERIOD]:
+            return True
+        clock[2] = t
+        clock[3] = 0.0
     return clock[1] > p[P_MAXEV]
 
 
@@ -893,7 +938,7 @@ def run_scene(model, springs, fric, harm, record, start, cache, out):
     its = 0  # the next sample time
     while its < ts.shape[0] and ts[its] < t:
         its += 1
-    clock = np.array([math.floor(t / p[P_PERIOD]), 0.0])
+    clock = np.array([math.floor(t / p[P_PERIOD]), 0.0, t, 0.0])
     # what the slot, |kap|^n and the integral tables were last found for: scalars, not an array, so that
     # they stay in registers (an inlined helper returning them cost 15 % of a run)
     slot_key = -1
@@ -943,7 +988,8 @@ def run_scene(model, springs, fric, harm, record, start, cache, out):
         move_to_end(nf, building, units, springs, fric, mode, sigma, kap, ek, C, P, tau, q, v, s_before, diag)
         t = t_next if not event else t + tau
         for j in range(nu):
-            escape[j] = 0
+            if not _still_leaving(j, nf, units, mode, escape, q, v):
+                escape[j] = 0
             escape_v[j] = 0
         if not event:
             continue

@@ -462,10 +462,21 @@ def _copy_identical_rows(units, springs, mode, nf, q, v, C, P):
 
 @njit(cache=True)
 def _phi0(z, big_t, ez):
-    """Integral over [0, T] of exp(z tau); ez = exp(z T)."""
+    """Integral over [0, T] of exp(z tau); ez = exp(z T).
+
+    Below |z T| = _SERIES by its power series, as _phi_m: (ez - 1) / z loses eps / |z T| to cancellation,
+    1e-13 at |z T| = 1e-3, and a lightly damped pair (z = 2 Re kap) sits there on every short segment.
+    """
     zt = z * big_t
-    if abs(zt) < 1e-3:
-        return big_t * (1.0 + zt * (0.5 + zt * (1.0 / 6.0 + zt * (1.0 / 24.0 + zt * (1.0 / 120.0 + zt / 720.0)))))
+    if zt.real * zt.real + zt.imag * zt.imag < _SERIES * _SERIES:
+        term = 1.0 + 0.0j
+        acc = 0.0 + 0.0j
+        for n in range(40):
+            acc += term * _RECIP[n + 1]
+            term = term * zt * _RECIP[n + 1]
+            if term.real * term.real + term.imag * term.imag < 1e-36:
+                break
+        return acc * big_t
     return (ez - 1.0) / z
 
 

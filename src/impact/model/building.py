@@ -39,6 +39,44 @@ def modal_damping(mass: np.ndarray, stiffness: np.ndarray, zeta: float) -> np.nd
     return m @ phi @ np.diag(2.0 * zeta * np.sqrt(w2)) @ phi.T @ m
 
 
+def _checked_floors(masses, storey_stiffness) -> tuple[np.ndarray, np.ndarray]:
+    """Floor masses and storey stiffnesses as float arrays, refused by name unless one positive value each."""
+    m = _float_array("masses", masses)
+    k = _float_array("storey_stiffness", storey_stiffness)
+    if m.ndim != 1 or len(m) < 1:
+        raise ParameterError("masses must be a list of at least one floor mass")
+    if k.shape != m.shape:
+        raise ParameterError(f"storey_stiffness has {len(k)} values for {len(m)} floors: give one per storey")
+    for i, (mi, ki) in enumerate(zip(m, k), start=1):
+        _check(f"masses[{i}]", mi, 0.0, 1e15, lo_open=True)
+        _check(f"storey_stiffness[{i}]", ki, 0.0, 1e18, lo_open=True)
+    return m, k
+
+
+def _checked_damping(damping, n: int) -> np.ndarray:
+    """An n x n damping matrix, symmetric and positive semi-definite to round-off of its largest entry.
+
+    The test is on the whole matrix's scale, not entry by entry: modal damping of floors whose masses
+    differ by 1e3 has off-diagonal entries of pure round-off, asymmetric relative to themselves.
+    """
+    c = np.atleast_2d(_float_array("damping", damping))
+    if c.shape != (n, n):
+        raise ParameterError(f"damping must be a {n} x {n} matrix")
+    if not np.all(np.isfinite(c)):
+        raise ParameterError("damping must be finite")
+    scale = np.max(np.abs(c))
+    if np.max(np.abs(c - c.T)) > 1e-12 * scale or np.min(np.linalg.eigvalsh(0.5 * (c + c.T))) < -1e-12 * scale:
+        raise ParameterError("damping must be a symmetric positive semi-definite matrix")
+    return c
+
+
+def _float_array(name: str, values) -> np.ndarray:
+    try:
+        return np.atleast_1d(np.asarray(values, dtype=float))
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be numbers, got {values!r}") from None
+
+
 @dataclass(frozen=True, eq=False)
 class Building:
     """A shear building: floor masses (N,), storey stiffnesses (N,), damping matrix (N, N)."""
@@ -49,20 +87,8 @@ class Building:
     zeta: float = math.nan
 
     def __post_init__(self):
-        m = np.atleast_1d(np.asarray(self.masses, dtype=float))
-        k = np.atleast_1d(np.asarray(self.storey_stiffness, dtype=float))
-        c = np.atleast_2d(np.asarray(self.damping, dtype=float))
-        if m.ndim != 1 or len(m) < 1:
-            raise ParameterError("masses must be a list of at least one floor mass")
-        if k.shape != m.shape:
-            raise ParameterError(f"storey_stiffness has {len(k)} values for {len(m)} floors: give one per storey")
-        if c.shape != (len(m), len(m)):
-            raise ParameterError(f"damping must be a {len(m)} x {len(m)} matrix")
-        for i, (mi, ki) in enumerate(zip(m, k), start=1):
-            _check(f"masses[{i}]", mi, 0.0, 1e15, lo_open=True)
-            _check(f"storey_stiffness[{i}]", ki, 0.0, 1e18, lo_open=True)
-        if not np.allclose(c, c.T, rtol=1e-12, atol=0.0) or np.min(np.linalg.eigvalsh(c)) < -1e-12 * np.max(np.abs(c)):
-            raise ParameterError("damping must be a symmetric positive semi-definite matrix")
+        m, k = _checked_floors(self.masses, self.storey_stiffness)
+        c = _checked_damping(self.damping, len(m))
         object.__setattr__(self, "masses", m)
         object.__setattr__(self, "storey_stiffness", k)
         object.__setattr__(self, "damping", c)
@@ -86,16 +112,17 @@ class Building:
     @classmethod
     def explicit(cls, masses, storey_stiffness, zeta: float | None = None, storey_damping=None) -> "Building":
         """Given floor masses and storey stiffnesses; damping as a modal ratio or as storey dashpots."""
-        m = np.atleast_1d(np.asarray(masses, dtype=float))
-        k = np.atleast_1d(np.asarray(storey_stiffness, dtype=float))
+        m, k = _checked_floors(masses, storey_stiffness)
         if (zeta is None) == (storey_damping is None):
             raise ParameterError("give exactly one of zeta (modal damping ratio) and storey_damping (dashpots)")
         if zeta is not None:
             _check("zeta", zeta, 0.0, 1.0, hi_open=True)
             return cls(m, k, modal_damping(m, _storey_matrix(k), zeta), zeta=float(zeta))
-        c = np.atleast_1d(np.asarray(storey_damping, dtype=float))
+        c = _float_array("storey_damping", storey_damping)
         if c.shape != m.shape:
             raise ParameterError(f"storey_damping has {len(c)} values for {len(m)} floors: give one per storey")
+        for i, ci in enumerate(c, start=1):
+            _check(f"storey_damping[{i}]", ci, 0.0, 1e18)
         return cls(m, k, _storey_matrix(c))
 
     @classmethod

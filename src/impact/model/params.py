@@ -27,6 +27,12 @@ class ParameterError(ValueError):
     """A parameter outside its allowed range; the message names the field."""
 
 
+#: the highest tuning of a scene's PID or TMD (its frequency over the building's fundamental): beyond it the
+#: damper's spring is over 1e6 times the building's stiffness per mass, and the eigen-decomposition's round-off,
+#: about tuning^2 * eps of the energy, passes the 1e-9 to which every run balances (2e-10 at 1e3, 1e-8 at 1e4)
+MAX_TUNING = 1e3
+
+
 def _check(name: str, value: float, lo: float, hi: float, *, lo_open=False, hi_open=False) -> float:
     value = float(value)
     below = value <= lo if lo_open else value < lo

@@ -72,6 +72,8 @@ class Record:
 
     def scaled_to_pga(self, pga_g: float) -> np.ndarray:
         _check("pga_g", pga_g, 0.0, 10.0, lo_open=True)
+        if not self.pga_g > 0.0:
+            raise ParameterError(f"record {self.name!r} is zero at every sample: it cannot be scaled to pga_g = {pga_g}")
         return self.accel_g * (pga_g / self.pga_g)
 
 

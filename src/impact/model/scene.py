@@ -21,7 +21,7 @@ from dataclasses import KW_ONLY, dataclass
 import numpy as np
 
 from impact.model.building import Building
-from impact.model.params import G_GRAV, STARTS, ParameterError, _check, check_choice, check_fields
+from impact.model.params import G_GRAV, MAX_TUNING, STARTS, ParameterError, _check, check_choice, check_fields
 
 DAMPER_KINDS = ("cid", "pid", "tmd")
 
@@ -55,7 +55,7 @@ class Damper:
     def __post_init__(self):
         check_choice("kind", self.kind, DAMPER_KINDS)
         tuning_floor = "[0" if self.kind == "cid" else "(0"
-        check_fields(self, mass="(0, 1e15]", gap="[0, 1e12]", e="[0, 1]", tuning=f"{tuning_floor}, 1e4]",
+        check_fields(self, mass="(0, 1e15]", gap="[0, 1e12]", e="[0, 1]", tuning=f"{tuning_floor}, {MAX_TUNING:g}]",
                      damping="[0, 1)", nu="[0, 100]")
         if int(self.units) != self.units or not 1 <= self.units <= 60:
             raise ParameterError(f"units = {self.units!r} is out of range: allowed integers [1, 60]")
@@ -63,6 +63,7 @@ class Damper:
             raise ParameterError("nu is only defined for kind 'cid' (only a free mass slides on a floor)")
         if self.kind == "tmd" and self.gap:
             raise ParameterError("gap is not defined for kind 'tmd' (a TMD has no walls): leave it at 0")
+        _check_floor("floor", self.floor)
 
     @property
     def has_walls(self) -> bool:
@@ -82,6 +83,16 @@ class Harmonic:
         _check("amplitude", self.amplitude, 0.0, 1e18, lo_open=True)
         _check("omega", self.omega, 0.0, 1e6, lo_open=True)
         _check("phase", self.phase, -2 * math.pi, 2 * math.pi)
+        _check_floor("floor", self.floor)
+
+
+def _check_floor(name: str, floor) -> None:
+    """A floor is None (the roof) or a whole number from 1; the building's height is checked by the Scene."""
+    if floor is None:
+        return
+    if isinstance(floor, bool) or not isinstance(floor, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(floor) or int(floor) != floor or floor < 1:
+        raise ParameterError(f"{name} = {floor!r} is out of range: allowed None (the roof) or integers from 1")
 
 
 def _samples(name: str, values, dt: float) -> np.ndarray:
@@ -153,6 +164,10 @@ class Scene:
     gravity    acceleration of gravity in the scene's units (friction only)
     unit_starts  each unit's initial displacement from the middle of its walls, in unit_list() order
                (overrides start; a unit at +-d/2 rests on that wall; a TMD's entry must be 0)
+    max_events_per_period  a bound on a run's cost, not a limit of the physics: an elastic unit held on
+               one wall of a 5e-7 m gap bounces every 3e-6 s, 1e6 events a period, all resolved.  A run
+               that reaches it, or makes 1000 events within 1e-9 of a period (a loop without progress,
+               which the engine guards against), ends flagged (event_cap_reached)
     """
 
     building: Building
@@ -162,18 +177,20 @@ class Scene:
     window: float | None = None
     start: str = "centre"
     gravity: float = G_GRAV
-    max_events_per_period: int = 20000
+    max_events_per_period: int = 2_000_000
     unit_starts: tuple | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "dampers", tuple(self.dampers))
-        if self.unit_starts is not None:
-            self._check_unit_starts()
         check_choice("start", self.start, STARTS)
-        if self.load is None:
-            raise ParameterError("load is required: Harmonic, GroundMotion or ForceRecord")
+        if not isinstance(self.load, (Harmonic, GroundMotion, ForceRecord)):
+            raise ParameterError(f"load = {self.load!r} is not a load: give a Harmonic, GroundMotion or ForceRecord")
+        if not isinstance(self.building, Building):
+            raise ParameterError(f"building must be a Building, got {type(self.building).__name__}")
         n = self.building.storeys
         for i, d in enumerate(self.dampers):
+            if not isinstance(d, Damper):
+                raise ParameterError(f"dampers[{i}] must be a Damper, got {type(d).__name__}")
             if d.floor is not None and not 1 <= d.floor <= n:
                 raise ParameterError(f"dampers[{i}].floor = {d.floor} is out of range: allowed [1, {n}]")
         if isinstance(self.load, Harmonic) and self.load.floor is not None and not 1 <= self.load.floor <= n:
@@ -190,6 +207,8 @@ class Scene:
                                  "allowed integers >= 10")
         if len(self.unit_list()) > 60:
             raise ParameterError("at most 60 damper units in one scene")
+        if self.unit_starts is not None:
+            self._check_unit_starts()
 
     def _check_unit_starts(self) -> None:
         starts = tuple(float(x) for x in self.unit_starts)

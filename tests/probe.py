@@ -1,0 +1,141 @@
+"""A seeded random probe of the scene engine: scenes a new user could draw, and what every run must satisfy.
+
+draw_scene(rng) builds one scene: 1 to 4 storeys (uniform, or explicit with floor-to-floor mass and
+stiffness ratios up to 1e2), 0 to 3 dampers of 1 to 6 units (CID, PID, TMD) on random floors, gaps from
+1e-6 of the motion's scale to far beyond it, e anywhere in [0, 1], friction under some CIDs, tunings from
+1e-2 to MAX_TUNING (mostly 0.1 to 10), and one load (harmonic on a floor, a stretch of a real record, a
+Kanai-Tajimi motion, or a narrow-band wind force).  violations(scene, result) lists every promise the run broke.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from impact.model.building import Building
+from impact.model.params import MAX_TUNING
+from impact.model.records import kanai_tajimi, load_record, narrow_band_force
+from impact.model.scene import Damper, ForceRecord, GroundMotion, Harmonic, Scene
+
+RECORDS = ("elcentro", "lomaprieta", "northridge", "sanfernando")
+ENERGY_TOL = 1e-9        # energy residual over the energy scale ...
+SEGMENT_ROUNDOFF = 1e-15  # ... plus this per segment: each one's exact integrals carry a few ulps, and a
+                          # run of millions of segments (an elastic unit in a tiny gap) adds them up
+PENETRATION_TOL = 1e-9   # beyond a wall, over the motion's scale
+SAMPLES = 4001           # dense output points per run for the peak check
+
+
+def _building(rng) -> Building:
+    storeys = int(rng.integers(1, 5))
+    zeta = float(rng.uniform(0.005, 0.1))
+    period = float(10 ** rng.uniform(-1, 0.5))
+    if rng.random() < 0.5:
+        return Building.uniform(storeys, period, zeta)
+    base = Building.uniform(storeys, period, zeta)
+    masses = base.masses * 10 ** rng.uniform(-1, 1, storeys)
+    stiffness = base.storey_stiffness * 10 ** rng.uniform(-1, 1, storeys)
+    if rng.random() < 0.5:
+        return Building.explicit(masses, stiffness, zeta=zeta)
+    w1 = Building.explicit(masses, stiffness, zeta=zeta).omega1
+    return Building.explicit(masses, stiffness, storey_damping=2 * zeta * stiffness / w1)
+
+
+def _load(rng, building: Building, seconds: float):
+    """A load of about ``seconds`` and the motion's scale it is expected to cause (a static deflection, in m)."""
+    w1 = building.omega1
+    kind = rng.choice(["harmonic", "record", "kanai-tajimi", "wind"])
+    if kind == "harmonic":
+        force = building.total_mass * float(rng.uniform(0.05, 1.0))
+        floor = int(rng.integers(1, building.storeys + 1))
+        load = Harmonic(force, w1 * float(10 ** rng.uniform(-0.5, 0.5)), float(rng.uniform(-3, 3)), floor=floor)
+        return load, force / (building.total_mass * w1 * w1)
+    if kind == "record":
+        record = load_record(str(rng.choice(RECORDS)))
+        n = int(seconds / record.dt) + 1
+        start = int(rng.integers(0, record.npts - n))
+        accel = record.accel_g[start:start + n] * 9.80665
+        if not np.any(accel):
+            accel = record.accel_g[:n] * 9.80665
+        pga = float(rng.uniform(0.05, 0.6)) * 9.80665
+        return GroundMotion(accel * pga / np.max(np.abs(accel)), record.dt, record.name), pga / (w1 * w1)
+    if kind == "kanai-tajimi":
+        pga_g = float(rng.uniform(0.05, 0.6))
+        record = kanai_tajimi(int(rng.integers(0, 1000)), seconds, 0.01,
+                              soil=str(rng.choice(["firm", "medium", "soft"])), pga_g=pga_g,
+                              envelope_params=(0.1 * seconds, 0.5 * seconds, 4.0 / seconds))
+        return GroundMotion.from_record(record), pga_g * 9.80665 / (w1 * w1)
+    rms = building.total_mass * float(rng.uniform(0.01, 0.2))
+    force = narrow_band_force(int(rng.integers(0, 1000)), seconds, 0.02, centre_rad_s=w1, bandwidth=0.2, rms=rms)
+    dist = np.linspace(1.0, 2.0, building.storeys)
+    dist /= dist.sum()
+    return ForceRecord(force, 0.02, dist, "wind"), 3 * rms / (building.total_mass * w1 * w1)
+
+
+def _tuning(rng) -> float:
+    """Mostly near the building's modes; one in five anywhere from 1e-2 to the largest allowed."""
+    if rng.random() < 0.2:
+        return float(10 ** rng.uniform(-2, math.log10(MAX_TUNING)))
+    return float(10 ** rng.uniform(-1, 1))
+
+
+def _damper(rng, building: Building, scale: float) -> Damper:
+    kind = str(rng.choice(["cid", "pid", "tmd"]))
+    mass = building.total_mass * float(10 ** rng.uniform(-3, -0.7))
+    floor = int(rng.integers(1, building.storeys + 1))
+    units = int(rng.choice([1, 1, 2, 3, 6]))
+    if kind == "tmd":
+        return Damper("tmd", mass=mass, tuning=_tuning(rng), damping=float(rng.uniform(0, 0.3)),
+                      floor=floor, units=units)
+    gap = scale * float(10 ** rng.uniform(-6, 2))
+    e = float(rng.choice([0.0, 1.0, rng.uniform(0, 1)]))
+    if kind == "pid":
+        return Damper("pid", mass=mass, gap=gap, e=e, tuning=_tuning(rng), floor=floor,
+                      units=units)
+    nu = float(rng.uniform(0, 0.5)) if rng.random() < 0.3 else 0.0
+    return Damper("cid", mass=mass, gap=gap, e=e, nu=nu, floor=floor, units=units)
+
+
+def draw_scene(rng, seconds: float = 3.0) -> tuple[Scene, float]:
+    """One random scene of about ``seconds`` and its motion's scale (metres)."""
+    building = _building(rng)
+    load, scale = _load(rng, building, seconds)
+    dampers = tuple(_damper(rng, building, scale) for _ in range(int(rng.integers(0, 4))))
+    start = str(rng.choice(["centre", "left", "right"]))
+    duration = float(rng.uniform(0.3, 1.3)) * seconds if isinstance(load, Harmonic) else None
+    return Scene(building, dampers, load, duration=duration, start=start), scale
+
+
+def _sampled_peaks(scene: Scene, q: np.ndarray) -> np.ndarray:
+    """The monitors' displacement rows (roof, drifts, first unit of each damper's stroke) over samples."""
+    nf = scene.building.storeys
+    floors = q[:, :nf]
+    drifts = np.diff(np.concatenate([np.zeros((len(q), 1)), floors], axis=1), axis=1)
+    strokes, first = [], 0
+    for d in scene.dampers:
+        strokes.append(q[:, nf + first] - q[:, scene.floor_index(d.floor)])
+        first += int(d.units)
+    rows = [floors[:, -1], *drifts.T, *strokes]
+    return np.array([np.max(np.abs(r)) for r in rows])
+
+
+def violations(scene: Scene, scale: float, result) -> list[str]:
+    """Every promise the run broke: finished, finite, energy, penetration, no dense sample above a peak."""
+    diag = result.diagnostics
+    found = []
+    if diag["event_cap_reached"]:
+        found.append("event cap")
+    if not np.all(np.isfinite(result.final_q)) or not math.isfinite(result.peak_roof_displacement):
+        found.append("non-finite result")
+    if not abs(diag["energy_residual"]) <= ENERGY_TOL + SEGMENT_ROUNDOFF * diag["segments"]:
+        found.append(f"energy residual {diag['energy_residual']:.2e}")
+    if not diag["max_penetration"] <= PENETRATION_TOL * scale:
+        found.append(f"penetration {diag['max_penetration'] / scale:.2e} of the scale")
+    if diag["uncertified_peak_segments"]:
+        found.append("uncertified peak")
+    certified = np.concatenate([[result.peak_roof_displacement], result.peak_drifts, result.peak_strokes])
+    sampled = _sampled_peaks(scene, result.samples["q"])
+    low = sampled > certified * (1 + 1e-9) + 1e-12 * scale
+    if np.any(low):
+        found.append(f"sample above a certified peak by {np.max(sampled[low] / certified[low] - 1):.2e}")
+    return found

@@ -1,0 +1,252 @@
+"""Exact to the end: certified peaks that hold over long segments, and input refused by name before it is used."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from impact.engine.run import simulate
+from impact.model.building import Building
+from impact.model.params import ParameterError
+from impact.model.records import Record
+from impact.model.scene import Damper, GroundMotion, Harmonic, Scene
+
+
+def _drifts(q: np.ndarray, storeys: int) -> np.ndarray:
+    """Interstorey drifts of sampled floor displacements (columns 0 .. storeys-1)."""
+    floors = q[:, :storeys]
+    return np.diff(np.concatenate([np.zeros((len(floors), 1)), floors], axis=1), axis=1)
+
+
+def _light_roof_building() -> Building:
+    """Found by a random probe: a roof 1e3 times lighter than the floors below, its mode at 37,000 rad/s
+    with 0.04 % damping, so one 1.25 s segment holds about 15,000 extrema of the roof's drift."""
+    return Building.explicit(
+        [1e6] * 5 + [1e3],
+        [20345040666.75226, 565569456638.814, 4733876510853.915, 1000677452750.3761, 343362551147.1776,
+         1394267597825.594],
+        storey_damping=[266429.29683412315, 469052.93343143363, 28329577.954097528, 19870667.23404263,
+                        3633227.123470409, 31790.46830873423])
+
+
+def test_a_peak_over_one_long_segment_is_never_below_the_motion():
+    """The roof's largest drift is its first swing (t = 8e-5 s); the search used to run out of visits
+    from the segment's end and report 2.65e-6 m against 5.02e-6 m sampled.  Now it is certified, it bounds
+    a dense sampling from above within the sampling's own error, and it is the same peak whatever the
+    run's length, since the swing that holds it lies in every run."""
+    building = _light_roof_building()
+    load = Harmonic(3673179.105210283, 555.7136400366792, -1.2981195463482733)
+    times = np.linspace(0.0, 1.25, 200001)
+    short = simulate(Scene(building, (), load, duration=1.25), measures=("peaks", "samples"), times=times)
+    sampled = np.abs(_drifts(short.samples["q"], 6)).max(axis=0)
+    assert short.diagnostics["segments"] == 1
+    assert short.diagnostics["uncertified_peak_segments"] == 0
+    assert np.all(short.peak_drifts >= sampled * (1.0 - 1e-12))
+    # 6.25e-6 s between samples of a 1.7e-4 s period: a sampled peak is low by at most 1 - cos(pi/27)
+    assert np.all(short.peak_drifts <= sampled / math.cos(math.pi * 6.25e-6 / 1.68e-4))
+    for duration in (2.0, 20.0):
+        longer = simulate(Scene(building, (), load, duration=duration), measures=("peaks",))
+        assert longer.diagnostics["uncertified_peak_segments"] == 0
+        assert longer.peak_drifts[-1] == pytest.approx(short.peak_drifts[-1], rel=1e-12)
+
+
+def test_explicit_building_accepts_the_modal_damping_it_builds():
+    """Floors of 1 and 1e-3: the modal damping matrix's off-diagonal entries are round-off of its largest,
+    asymmetric relative to themselves; the building is valid and its modes are damped at zeta."""
+    building = Building.explicit([1, 1e-3, 1, 1e-3], [1, 1e-3, 1, 1e-3], zeta=0.05)
+    w, phi = building.modes()
+    modal = phi.T @ building.damping @ phi
+    assert np.diag(modal) == pytest.approx(2 * 0.05 * w, rel=1e-9)
+
+
+@pytest.mark.parametrize("masses, stiffness, field", [
+    ([1.0, -1.0], [1.0, 1.0], "masses[2]"),
+    ([1.0, 1.0], [1.0, math.nan], "storey_stiffness[2]"),
+    ([1.0, 1.0], [1.0], "storey_stiffness has 1 values for 2 floors"),
+    ([1.0, "heavy"], [1.0, 1.0], "masses must be numbers"),
+])
+def test_explicit_building_names_bad_floors_before_any_eigenproblem(masses, stiffness, field):
+    for damping in (dict(zeta=0.05), dict(storey_damping=[0.1, 0.1])):
+        with pytest.raises(ParameterError, match=field.replace("[", r"\[").replace("]", r"\]")):
+            Building.explicit(masses, stiffness, **damping)
+
+
+def test_a_scene_refuses_what_is_not_a_damper_a_load_or_a_floor():
+    building = Building.uniform(3, 1.0, 0.02)
+    load = Harmonic(1.0, 6.0)
+    with pytest.raises(ParameterError, match=r"dampers\[0\] must be a Damper, got dict"):
+        Scene(building, ({"kind": "cid", "mass": 1.0},), load, duration=1.0)
+    with pytest.raises(ParameterError, match="load = .* is not a load"):
+        Scene(building, (), "elcentro", duration=1.0)
+    for floor in (2.5, 0, True, math.nan):
+        with pytest.raises(ParameterError, match="floor"):
+            Damper("cid", mass=1.0, gap=0.1, floor=floor)
+        with pytest.raises(ParameterError, match="floor"):
+            Harmonic(1.0, 6.0, floor=floor)
+    assert Damper("cid", mass=1.0, gap=0.1, floor=2.0).floor == 2.0  # a whole number written as a float
+
+
+def test_a_zero_record_cannot_be_scaled_to_a_pga_and_says_so():
+    zero = Record(name="silence", source="test", dt=0.01, accel_g=np.zeros(50))
+    with pytest.raises(ParameterError, match="'silence' is zero at every sample"):
+        GroundMotion.from_record(zero, pga_g=0.3)
+    assert GroundMotion.from_record(zero).pga == 0.0  # unscaled, it is a valid (quiet) load
+
+
+@pytest.mark.parametrize("mu", [0.02, 0.1])
+def test_units_resting_on_opposite_walls_do_not_trade_a_touch_forever(mu):
+    """Found by a random probe: two units on opposite walls of a 1e6 m gap start at rest with the floor, so
+    their separation stays at round-off of the gap.  When one was released, the other (leaving its wall at
+    2.7e-10 m/s, below one ulp of 5e5 m per step) lost its escape at the end of the segment and was found
+    touching its wall 3e-73 s later, which then took the first unit's escape: 20,000 grazes and the event
+    cap in 0.003 s.  Now the run finishes, with few events, and balances its energy."""
+    from impact.model.records import load_record
+
+    building = Building.uniform(1, 5.0, 0.02)
+    scaled = GroundMotion.from_record(load_record("northridge"), pga_g=0.57)
+    load = GroundMotion(scaled.accel[:34], scaled.dt, "northridge, first 34 samples")
+    gap = 1e6
+    damper = Damper("cid", mass=mu * building.total_mass, gap=gap, e=0.5, units=2)
+    result = simulate(Scene(building, (damper,), load, unit_starts=(-gap / 2, gap / 2), duration=5.0))
+    diag = result.diagnostics
+    assert not diag["event_cap_reached"]
+    assert diag["segments"] < 100 and diag["grazing_events"] < 10
+    assert abs(diag["energy_residual"]) <= 1e-9
+
+
+@pytest.mark.parametrize("nu, e_other", [(0.05, 0.6), (0.3, 0.0), (0.3, 0.6)])
+def test_a_sliding_unit_whose_floor_another_unit_strikes_balances_its_energy(nu, e_other):
+    """A friction CID beside a frictionless CID on one floor.  The other unit's impact makes the floor's
+    velocity jump; a unit sliding on it kept its old slip direction, friction then pushed the slide along,
+    and the slide's end discarded the relative velocity it still had: residuals up to 1.4e-4 (each damper
+    alone balances to 1e-14).  Friction now turns with the slip."""
+    from impact.model.records import load_record
+
+    building = Building.uniform(1, 1.0, 0.02)
+    load = GroundMotion.from_record(load_record("elcentro"), pga_g=0.3)
+    sliding = Damper("cid", mass=0.02 * building.total_mass, gap=0.05, e=0.5, nu=nu)
+    other = Damper("cid", mass=0.02 * building.total_mass, gap=0.05, e=e_other)
+    result = simulate(Scene(building, (sliding, other), load, duration=10.0))
+    diag = result.diagnostics
+    assert diag["impacts"] > 20 and diag["friction_work"] > 0.0
+    assert abs(diag["energy_residual"]) <= 1e-9
+
+
+@pytest.mark.parametrize("kinds", [("cid", "cid"), ("pid", "pid"), ("cid", "pid")])
+def test_two_plastic_units_of_different_gaps_on_one_floor_balance_their_energy(kinds):
+    """Found by the probe: a plastic unit striking its floor while another rested on a wall there.  The
+    impact moved the floor away from the resting unit, but the strike's plastic merge, which moves every
+    unit resting on the floor with it, ran before the resting unit was released: it was dragged along
+    with an unaccounted velocity jump (residual 2.6e-9 and 1.1e-6).  It is now released first."""
+    building = Building.uniform(1, 0.12, 0.02, floor_mass=84022.4)
+    load = Harmonic(0.5 * building.total_mass, 1.2 * building.omega1, 0.3)
+    dampers = (Damper(kinds[0], mass=196.2, gap=2.6e-7, e=0.0, tuning=1.8),
+               Damper(kinds[1], mass=229.2, gap=2.4e-8, e=0.0, tuning=1.8))
+    result = simulate(Scene(building, dampers, load, duration=2.8, start="right"))
+    diag = result.diagnostics
+    assert diag["impacts"] > 100 and diag["sticking_episodes"] > 100
+    assert abs(diag["energy_residual"]) <= 1e-9
+
+
+def test_four_staggered_units_of_the_table_1_cid_finish_with_their_energy_balanced():
+    """The case the Table 1 stage stopped on (CID, g = 1.4, r = 0.965, 4 units spread from wall to wall):
+    20,007 grazes and the event cap, because a unit leaving its wall lost its escape whenever another
+    unit's event ended the segment.  It now finishes, its units strike, stick and are released."""
+    from impact.model.params import Protocol
+    from impact.stages.robustness.designs import Design
+    from impact.stages.robustness.runs import design_scene, staggered_starts
+
+    design = Design("cid", mu=0.01, beta=0.0048, gap_ratio=1.4, e=0.25, units=4)
+    scene = design_scene(design, 0.965, Protocol(), unit_starts=staggered_starts(4, design.gap))
+    result = simulate(scene)
+    diag = result.diagnostics
+    assert not diag["event_cap_reached"] and math.isfinite(result.amplitude)
+    assert diag["impacts"] > 1000 and diag["sticking_episodes"] > 100 and diag["time_in_contact"] > 0.0
+    assert diag["grazing_events"] < 0.1 * diag["impacts"]
+    assert abs(diag["energy_residual"]) <= 1e-9
+    assert diag["max_penetration"] <= 1e-9 * design.gap
+
+
+@pytest.mark.parametrize("start", ["left", "right"])
+def test_a_unit_released_from_a_wall_of_a_tiny_gap_meets_the_far_wall(start):
+    """Found by the probe: a force on floor 1 reaches the roof through two storeys, so a roof unit at rest
+    on a wall starts with a relative acceleration and jerk of pure round-off.  The escape from the wall
+    read its time from those derivatives (0.1 s) and, finding the unit clear of its wall there, did not see
+    that it had crossed the whole 1.6 um gap and the far wall: it reported a stroke of 479 half gaps.  The
+    escape now stays within the time the motion needs to cross the gap."""
+    building = Building.explicit([91186.25410821458, 445037.9736202061, 23997.65299979852],
+                                 [846960369.6778363, 10215723455.969011, 401763945.30874467],
+                                 storey_damping=[3432576.3167407215, 41402468.93331063, 1628276.1897250076])
+    load = Harmonic(452612.9880558316, 14.392035420356054, 1.3631146462218995, floor=1)
+    gap = 1.6101379718071428e-06
+    damper = Damper("cid", mass=19484.395082798175, gap=gap, e=0.0)
+    result = simulate(Scene(building, (damper,), load, duration=2.6, start=start), measures=("peaks",))
+    assert result.impacts > 5
+    assert result.peak_strokes[0] <= 0.5 * gap * (1 + 1e-9)
+    assert result.diagnostics["max_penetration"] <= 1e-9 * gap
+
+
+PROBE_SEED = 20261125
+PROBE_SCENES = 300
+#: scenes of the probe the engine does not yet resolve, and why: the test fails when one of them starts to
+#: pass (take it off) as when any other fails
+KNOWN_OPEN = {
+    94: "three elastic PID units in a 2e-5 m gap beside a plastic PID unit in a 3e-6 m gap and two TMDs: "
+        "1000 events within 1e-9 of a period, a chatter of several units on one floor that the engine does "
+        "not yet resolve as a set (issue 29's multi-unit Zeno limit), so the stall guard stops the run",
+    163: "a PID with r' = 851 (a pendulum 7e5 times stiffer than the building per mass) plastic on its wall: "
+         "whether the wall holds it and where its free motion goes disagree at round-off, so it is released "
+         "and touches again 1e-8 s later, 2.5 million times",
+    271: "six PID units with r' = 83 and e = 0.993 in a gap of 8e-5 of the motion: 24 million impacts in a "
+         "second, past the 2 million a period that bound a run's cost",
+    296: "a PID with r' = 319, elastic, in a gap of 1.6e-6 of the motion: the stiff pendulum's release as "
+         "in scene 163",
+}
+
+
+def test_random_scenes_run_to_the_end_exactly():
+    """The seeded probe (tests/probe.py): 300 scenes of about a second, drawn as a new user could, each run
+    with a dense output.  Every scene is either refused by a ParameterError that names what it refuses, or
+    runs to its end with finite results, no event cap, its energy balanced, no wall penetrated beyond 1e-9
+    of the motion's scale, and no dense sample above a certified peak; except the scenes of KNOWN_OPEN."""
+    from probe import SAMPLES, draw_scene, violations
+
+    failures, refused = [], []
+    for i in range(PROBE_SCENES):
+        rng = np.random.default_rng([PROBE_SEED, i])
+        try:
+            scene, scale = draw_scene(rng, seconds=1.0)
+        except ParameterError as exc:
+            refused.append(str(exc))
+            continue
+        result = simulate(scene, measures=("peaks", "samples"), times=np.linspace(0.0, scene.t_end, SAMPLES))
+        problems = violations(scene, scale, result)
+        if problems:
+            failures.append((i, problems))
+    assert {i for i, _ in failures} == set(KNOWN_OPEN), failures
+    assert len(refused) <= PROBE_SCENES // 20, refused
+    assert all(" = " in why or " must " in why or "too coarse" in why for why in refused), refused
+
+
+def test_an_elastic_unit_in_a_nanometre_gap_beside_another_damper_never_passes_its_wall():
+    """Found by the probe: three elastic PID units in a 2.2e-9 m gap beside a second PID on one floor, under
+    wind.  Their flights across the gap last 3.75e-6 s; where the gap function, a difference of terms 1e5
+    times larger, reads the same over many ulps, the crossing's Newton crept across that plateau and the
+    search returned the far end of its bracket, 0.75e-6 s late: 5.3e-7 of the motion's scale through the
+    wall.  The bracket is now halved on a plateau."""
+    from impact.model.records import narrow_band_force
+    from impact.model.scene import ForceRecord
+
+    building = Building.uniform(1, 0.23670280664961818, 0.021895972908311058)
+    wind = ForceRecord(narrow_band_force(894, 1.0, 0.02, centre_rad_s=26.54461683878695, bandwidth=0.2,
+                                         rms=19581.27871156148), 0.02, [1.0], "wind")
+    dampers = (Damper("pid", mass=19543.781791218174, gap=2.16191474325984e-05, e=0.29542512500691076,
+                      tuning=2.7692294496831766, units=3),
+               Damper("pid", mass=9074.91981238989, gap=2.2180697075710132e-09, e=1.0, tuning=0.39529077528662354,
+                      units=3))
+    scale = 0.0008336991947839789  # the probe's motion scale: three times the wind's rms over k
+    diag = simulate(Scene(building, dampers, wind, start="right")).diagnostics
+    assert diag["impacts"] > 10000
+    assert diag["max_penetration"] <= 1e-9 * scale
