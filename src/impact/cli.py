@@ -131,11 +131,15 @@ def _quake_record(args):
                         envelope_params=(2.0, 0.5 * duration, 0.5))
 
 
-#: impact quake's damper flags: which each --damper kind uses, and the value of one not given
+#: impact quake's damper flags: which each --damper kind uses, and the value of one not given (the others
+#: take Damper's own defaults)
 QUAKE_DAMPER_FLAGS = {"none": (), "cid": ("mu", "gap_m", "e", "nu", "units", "floor", "start"),
                       "pid": ("mu", "gap_m", "e", "rp", "damping", "units", "floor", "start"),
                       "tmd": ("mu", "tuning", "damping", "units", "floor")}
 QUAKE_DEFAULTS = dict(mu=0.02, e=0.5, rp=1.0, tuning=1.0, damping=0.0, nu=0.0, units=1, start="centre")
+#: the Damper field each flag sets (--mu and --start set the mass and the Scene's start instead)
+_DAMPER_FIELD = dict(gap_m="gap", e="e", rp="tuning", tuning="tuning", damping="damping", nu="nu", units="units",
+                     floor="floor")
 
 
 def _quake_damper_flags(args) -> dict:
@@ -150,11 +154,19 @@ def _quake_damper_flags(args) -> dict:
             for name in uses}
 
 
+def _quake_damper(args, flags: dict, total_mass: float):
+    """The Damper the flags describe: each flag used by the kind sets its field."""
+    from impact.model.scene import Damper
+
+    fields = {_DAMPER_FIELD[name]: value for name, value in flags.items() if name in _DAMPER_FIELD}
+    return Damper(args.damper, mass=flags["mu"] * total_mass, **fields)
+
+
 def cmd_quake(args) -> dict:
     """A shear building under a ground-motion record, with or without a damper at one floor."""
     from impact.engine.scenes import simulate_scene
     from impact.model.building import Building
-    from impact.model.scene import Damper, GroundMotion, Scene
+    from impact.model.scene import GroundMotion, Scene
 
     record = _quake_record(args)
     building = Building.uniform(args.storeys, args.period_s, args.zeta, floor_mass=args.floor_mass_kg)
@@ -165,10 +177,7 @@ def cmd_quake(args) -> dict:
     if args.damper != "none":
         if args.damper != "tmd" and args.gap_m is None:
             raise ParameterError(f"--gap-m is required for --damper {args.damper}")
-        dampers = (Damper(args.damper, mass=flags["mu"] * building.total_mass, floor=args.floor,
-                          gap=flags.get("gap_m", 0.0), e=flags.get("e", 0.0),
-                          tuning=flags.get("rp", flags.get("tuning", 1.0)), damping=flags.get("damping", 0.0),
-                          nu=flags.get("nu", 0.0), units=flags["units"]),)
+        dampers = (_quake_damper(args, flags, building.total_mass),)
     load = GroundMotion.from_record(record, pga_g=args.pga_g)
     scene = Scene(building, dampers, load, duration=args.duration_s, start=flags.get("start", "centre"))
     res = simulate_scene(scene)
