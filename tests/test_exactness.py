@@ -206,28 +206,57 @@ KNOWN_OPEN = {
 }
 
 
+#: scenes of the probe too costly for the suite's minute, run on their own (106) or not at all (the open
+#: 163 and 271, which only confirm what KNOWN_OPEN says); seconds on the development machine
+HEAVY = {
+    106: "six elastic CID units in a gap of 4e-6 of the motion: 18 million impacts in its second, 52 s",
+    163: "open (above): 2.5 million releases, 47 s",
+    271: "open (above): 24 million impacts, 121 s",
+}
+
+
+def _probe_scene(i):
+    """Scene i of the seeded probe (tests/probe.py) with its motion's scale, or the ParameterError refusing it."""
+    from probe import draw_scene
+
+    try:
+        return draw_scene(np.random.default_rng([PROBE_SEED, i]), seconds=1.0)
+    except ParameterError as exc:
+        return exc
+
+
+def _probe_violations(scene, scale):
+    from probe import SAMPLES, violations
+
+    result = simulate(scene, measures=("peaks", "samples"), times=np.linspace(0.0, scene.t_end, SAMPLES))
+    return violations(scene, scale, result)
+
+
 def test_random_scenes_run_to_the_end_exactly():
     """The seeded probe (tests/probe.py): 300 scenes of about a second, drawn as a new user could, each run
     with a dense output.  Every scene is either refused by a ParameterError that names what it refuses, or
     runs to its end with finite results, no event cap, its energy balanced, no wall penetrated beyond 1e-9
-    of the motion's scale, and no dense sample above a certified peak; except the scenes of KNOWN_OPEN."""
-    from probe import SAMPLES, draw_scene, violations
-
+    of the motion's scale, and no dense sample above a certified peak; except the scenes of KNOWN_OPEN.
+    The HEAVY scenes are drawn (none is refused) but run elsewhere."""
     failures, refused = [], []
     for i in range(PROBE_SCENES):
-        rng = np.random.default_rng([PROBE_SEED, i])
-        try:
-            scene, scale = draw_scene(rng, seconds=1.0)
-        except ParameterError as exc:
-            refused.append(str(exc))
-            continue
-        result = simulate(scene, measures=("peaks", "samples"), times=np.linspace(0.0, scene.t_end, SAMPLES))
-        problems = violations(scene, scale, result)
-        if problems:
-            failures.append((i, problems))
-    assert {i for i, _ in failures} == set(KNOWN_OPEN), failures
+        drawn = _probe_scene(i)
+        if isinstance(drawn, ParameterError):
+            refused.append(str(drawn))
+        elif i not in HEAVY:
+            problems = _probe_violations(*drawn)
+            if problems:
+                failures.append((i, problems))
+    assert {i for i, _ in failures} == set(KNOWN_OPEN) - set(HEAVY), failures
+    assert not [i for i in HEAVY if isinstance(_probe_scene(i), ParameterError)]
     assert len(refused) <= PROBE_SCENES // 20, refused
     assert all(" = " in why or " must " in why or "too coarse" in why for why in refused), refused
+
+
+def test_six_elastic_units_in_a_gap_of_four_millionths_of_the_motion_run_to_the_end_exactly():
+    """Probe scene 106: elastic units never come to rest, so their impacts (18 million in a second) are the
+    physics, each resolved; the run ends with every check of the probe met."""
+    assert _probe_violations(*_probe_scene(106)) == []
 
 
 def test_an_elastic_unit_in_a_nanometre_gap_beside_another_damper_never_passes_its_wall():
@@ -250,3 +279,76 @@ def test_an_elastic_unit_in_a_nanometre_gap_beside_another_damper_never_passes_i
     diag = simulate(Scene(building, dampers, wind, start="right")).diagnostics
     assert diag["impacts"] > 10000
     assert diag["max_penetration"] <= 1e-9 * scale
+
+
+def _pressed_units(specs, *, floor_mass=1e9, gap=0.02, push=1.0, duration=4.0):
+    """CID units (mass, e) on the floor of a one-storey building, each pushed towards its left wall by a
+    constant force of push (m/s2) times its mass, as gravity would press a ball to the ground; they start
+    in the middle.  A floor 1e7 times heavier than the units is the fixed wall of the textbook series."""
+    from impact.model.scene import ForceRecord
+
+    building = Building.uniform(1, 1.0, 0.02, floor_mass=floor_mass)
+    dampers = tuple(Damper("cid", m, gap=gap, e=e) for m, e in specs)
+    load = ForceRecord(np.full(2001, -push), duration / 2000, [0.0] + [m for m, _ in specs], "push")
+    return simulate(Scene(building, dampers, load, start="centre"), measures=("peaks", "records"), record=100000)
+
+
+@pytest.mark.parametrize("specs", [[(10.0, 0.8), (20.0, 0.8), (30.0, 0.8)], [(10.0, 0.5), (20.0, 0.7), (30.0, 0.8)]],
+                         ids=["in step", "apart"])
+def test_units_chattering_to_rest_on_one_wall_reach_the_limit_of_their_strike_series(specs):
+    """Three units bounce on one wall under a steady push a, the first strike at u0 = sqrt(a d) and
+    t1 = sqrt(d / a).  Summed as a geometric series, unit j's strikes come at speeds e^k u0 after flights of
+    2 e^k u0 / a, so they accumulate at t_inf = t1 + 2 e u0 / (a (1 - e)), having dissipated all its
+    relative energy, m u0^2 / 2.  The core stops each series at its last resolvable strike and rests the
+    unit there: its last strike falls short of t_inf by exactly the flights it skipped, 2 e u_K / (a (1 - e))
+    after a strike at u_K, and the losses are the series' sum, since the resting strike takes what the rest
+    of the series would have.  What the heavy floor moves changes all this by its mass ratio, 6e-8."""
+    gap, push, floor_mass = 0.02, 1.0, 1e9
+    result = _pressed_units(specs, floor_mass=floor_mass, gap=gap, push=push)
+    d = result.diagnostics
+    assert not d["event_cap_reached"] and abs(d["energy_residual"]) <= 1e-12
+    ratio = sum(m for m, _ in specs) / floor_mass
+    u0, t1 = math.sqrt(push * gap), math.sqrt(gap / push)
+    rec = result.records
+    for j, (m, e) in enumerate(specs):
+        mine = rec["unit"] == j
+        incoming = (rec["w_minus"] - rec["v_minus"])[mine]
+        rebound = (rec["w_plus"] - rec["v_plus"])[mine]
+        times = rec["t"][mine]
+        assert incoming[0] == pytest.approx(-u0, rel=10 * ratio)
+        assert times[0] == pytest.approx(t1, rel=10 * ratio)
+        # strike by strike, the series: rebound at e times the speed, and back at that speed
+        # (the floor's recoil, at most ratio u0, is all that parts them)
+        np.testing.assert_allclose(rebound[:-1], -e * incoming[:-1], rtol=10 * ratio, atol=ratio * u0)
+        np.testing.assert_allclose(incoming[1:], -rebound[:-1], rtol=10 * ratio, atol=ratio * u0)
+        assert rebound[-1] == pytest.approx(0.0, abs=1e-15)  # the last strike rests it
+        t_inf = t1 + 2.0 * e * u0 / (push * (1.0 - e))
+        skipped = 2.0 * e * abs(incoming[-1]) / (push * (1.0 - e))
+        assert t_inf - times[-1] == pytest.approx(skipped, rel=1e-3, abs=10 * ratio * t_inf)
+    assert d["impact_losses"] == pytest.approx(sum(0.5 * m * u0 ** 2 for m, _ in specs), rel=10 * ratio)
+    # at rest on the left wall, moving with their floor
+    q, v, half = result.final_q, result.final_v, 0.5 * gap
+    np.testing.assert_allclose(q[1:], q[0] - half, rtol=0, atol=1e-12 * gap)
+    np.testing.assert_array_equal(v[1:], v[0])
+
+
+def test_identical_units_that_start_apart_and_fall_into_step_end_as_one_unit_of_their_total_mass():
+    """Four plastic CID units staggered across their gap, under the building's resonant force: each sticks
+    where it strikes and is released as its wall decides, so after a few strikes all four rest on one wall
+    and leave it together, in step to the last bit.  From then on they are one unit of their total mass:
+    with 5 % damping the transient that differs dies as exp(-2 pi 0.05 120) = 4e-17 over 120 periods, and
+    the run ends in one unit's state, its amplitude the same."""
+    building = Building.uniform(1, 1.0, 0.05)
+    omega = 2.0 * math.pi
+    mass, gap, n = 0.02 * building.total_mass, 0.05, 4  # a damper's mass is that of all its units
+    load = Harmonic(0.05 * building.total_mass * omega ** 2 * 0.05, omega)
+    starts = tuple(np.linspace(-0.999, 0.999, n) * gap / 2)
+    many = simulate(Scene(building, (Damper("cid", mass, gap=gap, e=0.0, units=n),), load, duration=120.0,
+                          unit_starts=starts), measures=("amplitude", "peaks"))
+    one = simulate(Scene(building, (Damper("cid", mass, gap=gap, e=0.0),), load, duration=120.0, start="left"),
+                   measures=("amplitude", "peaks"))
+    np.testing.assert_array_equal(many.final_q[2:], many.final_q[1])  # in step
+    np.testing.assert_array_equal(many.final_v[2:], many.final_v[1])
+    np.testing.assert_allclose(many.final_q[:2], one.final_q, rtol=0, atol=1e-12 * gap)
+    np.testing.assert_allclose(many.final_v[:2], one.final_v, rtol=0, atol=1e-12 * gap * omega)
+    assert many.rms_roof_displacement == pytest.approx(one.rms_roof_displacement, rel=1e-12)

@@ -71,8 +71,9 @@ Rows = namedtuple("Rows", "cs ps cq pq cm pm cv pv cu pu")
 #: segment, and the weights of the half rows (modal.mode_weights)
 Vectors = namedtuple("Vectors", "stack found qs vs v_before reduced moduli s_before wt")
 
-#: the events found on a segment, per unit: time, wall side, kind; and what an instant's impacts did
-Events = namedtuple("Events", "t side kind hit impulse")
+#: the events found on a segment, per unit: time, wall side, kind; what an instant's impacts did; and its
+#: scratch flags (units resting on a wall they touched, floors whose impacts are done)
+Events = namedtuple("Events", "t side kind hit impulse touched floor_done")
 
 #: tables kept across segments: modal tables, a record step's tables, build_segment's scratch
 #: (floats, complexes) and the cache slot to replace next

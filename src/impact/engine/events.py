@@ -28,6 +28,7 @@ PEAK_RTOL = 1e-12  # the peak search stops refining an interval within this of t
 PEAK_MAX_VISITS = 100000  # a function of pure round-off could split forever: give up, and say so
 PEAK_VISITS_PER_EXTREMUM = 64  # ... but not before a long segment of a fast mode had this many visits per extremum
 PEAK_NOISE = 64 * _EPS  # the round-off of evaluating a row, relative to the sum of its terms' sizes
+_FINISHED, _GAVE_UP, _STACK_FULL = 0, 1, 2  # how a peak search ended
 
 
 @njit(cache=True)
@@ -335,15 +336,28 @@ def _extrema_bound(kap, big_t):
 
 
 @njit(cache=True)
-def _grown(stack):
-    """The peak search's stack with twice the rows, the old ones copied."""
-    bigger = np.empty((2 * stack.shape[0], stack.shape[1]))
-    bigger[:stack.shape[0]] = stack
-    return bigger
+def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
+    """max(peak, max |h| over [0, T]), certified to PEAK_RTOL (see _peak_search); stack: (n, 4) work array.
+
+    Returns the new peak, the time where it is attained (-1 if the old peak stands) and whether the search
+    finished (False: it gave up after many visits per extremum the fastest mode can have, and the peak is
+    only a lower bound).
+    """
+    peak, at, status = _peak_search(kap, kpow, ek, c, p, big_t, peak, stack)
+    rows = stack.shape[0]
+    while status == _STACK_FULL:
+        # a long segment of a fast mode outgrew the stack: search again with a deeper one, rarely enough to
+        # allocate it here (growing it inside the search's loop cost the common short search 5 %).  The peak
+        # found so far is attained, so it stands as the new search's bound
+        rows *= 4
+        peak, at_again, status = _peak_search(kap, kpow, ek, c, p, big_t, peak, np.empty((rows, 4)))
+        if at_again >= 0.0:
+            at = at_again
+    return peak, at, status == _FINISHED
 
 
 @njit(cache=True)
-def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
+def _peak_search(kap, kpow, ek, c, p, big_t, peak, stack):
     """max(peak, max |h| over [0, T]), certified to PEAK_RTOL.
 
     Branch and bound: an interval whose bound cannot beat the running peak is
@@ -353,10 +367,8 @@ def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
     h' provably keeps its sign is monotone: its ends hold its extremes.
     Intervals are searched from the segment's start: a decaying transient's
     largest swing comes first and prunes the rest.
-    kpow: kappa_powers of kap; ek = exp(kap T); stack: (n, 4) work array, grown when a long segment needs more.
-    Returns the new peak, the time where it is attained (-1 if the old peak stands) and whether the search
-    finished (False: it gave up after many visits per extremum the fastest mode can have, and the peak is
-    only a lower bound).
+    kpow: kappa_powers of kap; ek = exp(kap T); stack: (n, 4) work array.  Returns the new peak, the time
+    where it is attained (-1 if the old peak stands) and _FINISHED, _GAVE_UP or _STACK_FULL.
     """
     h0, d0, h1, d1 = _ends(kap, ek, c, p, big_t)
     at = -1.0
@@ -368,7 +380,7 @@ def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
         at = big_t
     m2 = bound_tab(kpow, c, p, 2, big_t)
     if max(abs(h0), abs(h1)) + m2 * big_t * big_t / 8.0 <= peak * (1.0 + PEAK_RTOL):
-        return peak, at, True
+        return peak, at, _FINISHED
     m3 = bound_tab(kpow, c, p, 3, big_t)
     # h is a sum of terms of this size: a swing within its round-off of the peak cannot be told from it
     # (a row that cancels to round-off, a TMD's stroke of 1e-17 m, would otherwise be split to hmin)
@@ -376,10 +388,11 @@ def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
     top = _push(stack, 0, 0.0, big_t, d0, d1)
     hmin = max(big_t, 1.0) * 1e-13
     visits = 0
+    visit_limit = max(PEAK_MAX_VISITS, PEAK_VISITS_PER_EXTREMUM * _extrema_bound(kap, big_t))
     while top > 0:
         visits += 1
-        if visits > PEAK_MAX_VISITS and visits > PEAK_VISITS_PER_EXTREMUM * _extrema_bound(kap, big_t):
-            return peak, at, False
+        if visits > visit_limit:
+            return peak, at, _GAVE_UP
         top -= 1
         a = stack[top, 0]
         b = stack[top, 1]
@@ -393,7 +406,7 @@ def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
         if (da > 0.0) == (db > 0.0) and min(abs(da), abs(db)) - m3 * w * w / 8.0 > 0.0:
             continue  # monotone: the ends were counted
         if top + 2 >= stack.shape[0]:
-            stack = _grown(stack)  # an interval dropped here would be a maximum never looked at
+            return peak, at, _STACK_FULL  # an interval dropped here would be a maximum never looked at
         if (da > 0.0) != (db > 0.0) and da != 0.0 and db != 0.0:
             tz = _zero_of_derivative(kap, c, p, a, b, da)
             hz, _, ddz = eval3(kap, c, p, tz)
@@ -415,4 +428,4 @@ def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
         peak, at, dmid = _probe(kap, c, p, mid, peak, at)
         top = _push(stack, top, mid, b, dmid, db)
         top = _push(stack, top, a, mid, da, dmid)
-    return peak, at, True
+    return peak, at, _FINISHED

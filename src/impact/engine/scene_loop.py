@@ -163,7 +163,7 @@ def _unit_level(j, units, springs, fric):
     return level
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)  # not inlined: inside run_scene's loop it cost a 4-unit CID 12 % (registers, not work)
 def _still_leaving(j, nf, units, mode, escape, q, v):
     """Unit j left a wall (escape) and, when the segment ended at another unit's event, is still on it to
     round-off of its gap and not moving back: it keeps leaving (a search from the wall without its escape
@@ -655,14 +655,16 @@ def resolve_events(tau_ev, building, units, fric, st, events, vstick, diag):
     ufloor, um, ud = units.floor, units.mass, units.gap
     mode, side, sigma, offset, escape, escape_v, check, q, v = (st.mode, st.side, st.sigma, st.offset, st.escape,
                                                                 st.escape_v, st.check, st.q, st.v)
-    ev_t, ev_side, ev_kind, hit, impulse = events
+    ev_t, ev_side, ev_kind, hit, impulse, touched, floors_done = events
     nf = building.mass.shape[0]
     nu = um.shape[0]
     limit = tau_ev * (1.0 + 16.0 * 2.220446049250313e-16) + 1e-300
-    touched = np.zeros(nu, dtype=np.bool_)
     for j in range(nu):
         hit[j] = False
+        touched[j] = False
         impulse[j] = 0.0
+    for i in range(nf):
+        floors_done[i] = False
     for j in range(nu):
         if not ev_t[j] <= limit:
             continue
@@ -707,7 +709,6 @@ def resolve_events(tau_ev, building, units, fric, st, events, vstick, diag):
             else:
                 hit[j] = True
     n_hit = 0
-    floors_done = np.zeros(nf, dtype=np.bool_)
     for j in range(nu):
         if hit[j] and not floors_done[ufloor[j]]:
             floors_done[ufloor[j]] = True
@@ -767,7 +768,8 @@ def _workspace(nt, nfull, nu, nmax, slots, nmon):
     vecs = Vectors(np.zeros((256, 4)), np.zeros(4), np.zeros(nfull), np.zeros(nfull), np.zeros(nfull), np.zeros(nmax),
                    np.zeros(2 * nmax), np.zeros(nu), np.ones(nt))
     events = Events(np.zeros(nu), np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64),
-                    np.zeros(nu, dtype=np.bool_), np.zeros(nu))
+                    np.zeros(nu, dtype=np.bool_), np.zeros(nu), np.zeros(nu, dtype=np.bool_),
+                    np.zeros(nfull, dtype=np.bool_))
     step = StepTables(np.full(slots, -1, dtype=np.int64), np.zeros((slots, nt), dtype=np.complex128),
                       np.zeros((slots, nt, nt), dtype=np.complex128), np.zeros((slots, nt, NPOLY), dtype=np.complex128))
     tables = Tables(modal_tables(slots, nmax, nmon), step, (np.zeros(7 * nmax), np.zeros(4 * nmax, dtype=np.complex128)),
@@ -988,7 +990,7 @@ def run_scene(model, springs, fric, harm, record, start, cache, out):
         move_to_end(nf, building, units, springs, fric, mode, sigma, kap, ek, C, P, tau, q, v, s_before, diag)
         t = t_next if not event else t + tau
         for j in range(nu):
-            if not _still_leaving(j, nf, units, mode, escape, q, v):
+            if escape[j] != 0 and not _still_leaving(j, nf, units, mode, escape, q, v):
                 escape[j] = 0
             escape_v[j] = 0
         if not event:
