@@ -47,8 +47,12 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path, PurePosixPath
 
 import numpy as np
+import xarray as xr
+import yaml
 
+from impact import __version__
 from impact.outputs.files import atomic_path
+from impact.outputs.provenance import git_state, package_versions
 from impact.outputs.report import canonical_json, config_hash
 
 MANIFEST = "MANIFEST.json"
@@ -153,7 +157,6 @@ def dataset_content_sha256(ds) -> str:
 
 def netcdf_content_sha256(path) -> str:
     """The content hash of a netCDF file, decoded with xarray (``dataset_content_sha256``)."""
-    import xarray as xr
 
     with xr.open_dataset(path, engine="netcdf4", cache=False) as ds:
         ds.load()
@@ -170,7 +173,6 @@ def _is_netcdf(name: str) -> bool:
 def environment() -> dict:
     from importlib.metadata import distributions
 
-    from impact.outputs.provenance import package_versions
 
     dists = {}
     for d in distributions():
@@ -189,7 +191,6 @@ def environment() -> dict:
 
 def citation_cff(citation: Mapping | None, commit: str, date: str) -> dict:
     """CITATION.cff (1.2.0) content: this run, citing the paper; ``citation`` keys override."""
-    from impact import __version__
 
     cff = {
         "cff-version": "1.2.0",
@@ -212,7 +213,6 @@ def citation_cff(citation: Mapping | None, commit: str, date: str) -> dict:
 
 
 def _yaml(obj) -> str:
-    import yaml
 
     return yaml.safe_dump(obj, sort_keys=False, allow_unicode=True, default_flow_style=False, width=100)
 
@@ -283,8 +283,6 @@ def build_archive(out_tar_gz, root, include: list, config: Mapping | None, citat
     files or folders under it (results, figures, tables, report, configuration files);
     config: the run's configuration; citation: keys of CITATION.cff to set (commit, date, ...).
     """
-    from impact import __version__
-    from impact.outputs.provenance import git_state
 
     out = Path(out_tar_gz)
     root = Path(root)

@@ -18,6 +18,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from impact.outputs.provenance import attributes
+
 if TYPE_CHECKING:  # xarray only for the annotations: a job that writes no dataset does not import it
     import xarray as xr
 
@@ -85,7 +87,6 @@ def undescribed_variables(ds: xr.Dataset) -> list[str]:
 
 def describe(ds: xr.Dataset) -> xr.Dataset:
     """The dataset with CF conventions and the code's provenance in its global attributes."""
-    from impact.outputs.provenance import attributes
 
     ds = ds.copy()
     ds.attrs = {**ds.attrs, **{k: v for k, v in attributes().items() if k not in ds.attrs}}

@@ -9,6 +9,8 @@ import sys
 import time
 from pathlib import Path
 
+from impact.outputs.provenance import attributes, package_versions
+
 
 @contextlib.contextmanager
 def logged(path):
@@ -33,7 +35,6 @@ def logged(path):
 
 
 def log_versions() -> None:
-    from impact.outputs.provenance import attributes, package_versions
 
     logging.info("python %s; %s", sys.version.split()[0], json.dumps(package_versions()))
     logging.info("provenance %s", json.dumps(attributes()))

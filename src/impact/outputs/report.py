@@ -26,13 +26,16 @@ import hashlib
 import itertools
 import json
 import logging
+import os
 import re
 import struct
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from types import SimpleNamespace
 
+from impact import __version__
 from impact.outputs.files import write_text_atomic
+from impact.outputs.provenance import git_state, now_utc, package_versions
 
 log = logging.getLogger(__name__)
 
@@ -135,8 +138,6 @@ def collect_provenance(config=None, executor: str = "unknown", benchmarks: Itera
     benchmarks: benchmark TSV paths (or a folder to search); executor: the Snakemake executor's
     name as the caller knows it (``local``, ``slurm``, ...).
     """
-    from impact import __version__
-    from impact.outputs.provenance import git_state, now_utc, package_versions
 
     if benchmarks is None:
         bench_paths = []
@@ -164,10 +165,7 @@ CONFIG_HASH_VARIABLE = "IMPACT_CONFIG_SHA256"
 
 def snakemake_report_metadata() -> dict:
     """The commit and configuration hash for the landing page of ``snakemake --report``."""
-    import os
 
-    from impact import __version__
-    from impact.outputs.provenance import git_state
 
     state = git_state()
     return {"git_commit": state["git_commit"], "git_dirty": state["git_dirty"], "code_version": __version__,

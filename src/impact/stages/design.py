@@ -25,8 +25,12 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from impact.model.params import ParameterError, Protocol, System, a_max
+from impact.closed_form.tmd import tmd_optimum, tmd_peak
+from impact.engine.paper import sweep
+from impact.model.params import ParameterError, Protocol, System, a_max, frequency_grid
 from impact.model.scene import DAMPER_KINDS
+from impact.stages.robustness.designs import Design
+from impact.stages.robustness.runs import scene_peak_response
 
 READING = "X_m_refined"   # the chart's X_m: each start's refined peak over the frequency grid
 MAX_CHECKS = 5            # chart designs tried by direct simulation before giving up
@@ -132,7 +136,6 @@ def tmd_chart(mu_values, beta: float, force_ratio: float, protocol: dict, r) -> 
     """The TMD at its equal-peak optimum for each mass ratio: X_m (its true peak), tuning and damping.
 
     protocol, r: the impact charts' protocol and frequency grid, which its direct check runs."""
-    from impact.closed_form.tmd import tmd_optimum
 
     mu_values = np.asarray(mu_values, dtype=float)
     optima = [tmd_optimum(float(mu), beta, force_ratio) for mu in mu_values]
@@ -251,7 +254,6 @@ def ranked(charts: dict, target: float, amplitude_range=None) -> list[Candidate]
 
 def check_grid(chart, refinement: int) -> np.ndarray:
     """The chart's frequency range, on a grid `refinement` times finer than the chart's."""
-    from impact.model.params import frequency_grid
 
     lo, hi, step = chart.attrs["freq_min"], chart.attrs["freq_max"], chart.attrs["freq_step"]
     return frequency_grid(lo, hi, step / refinement) if step > 0 else np.array([lo])
@@ -265,7 +267,6 @@ def simulate_design(chart, params: dict, refinement: int, scale: float = 1.0) ->
     protocol = Protocol(periods=attrs["periods"], average_from=attrs["average_from"])
     if kind == "tmd":
         return _simulate_tmd(chart, params, protocol)
-    from impact.engine.paper import sweep
 
     system = System.from_gap_ratio(kind, mu=params["mu"], beta=attrs["beta"], e=params["e"],
                                    gap_ratio=params["gap_ratio"] / scale, rp=params.get("rp", 0.0),
@@ -281,9 +282,6 @@ def simulate_design(chart, params: dict, refinement: int, scale: float = 1.0) ->
 
 def _simulate_tmd(chart, params: dict, protocol: Protocol) -> float:
     """The TMD on the scene core over the chart's frequencies and its two closed-form peaks."""
-    from impact.closed_form.tmd import tmd_peak
-    from impact.stages.robustness.designs import Design
-    from impact.stages.robustness.runs import scene_peak_response
 
     attrs = chart.attrs
     design = Design("tmd", mu=params["mu"], beta=attrs["beta"], tuning=params["tuning"],

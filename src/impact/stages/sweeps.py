@@ -10,7 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from impact.engine.paper import sweep
 from impact.model.params import ParameterError, Protocol, System, curve_id, frequency_grid
+from impact.outputs.datasets import curve_dataset
+from impact.stages.readings import add_readings
 
 
 def friction_scale(cfg: dict, spec: dict) -> dict:
@@ -87,9 +90,6 @@ def run_curve(cfg: dict, spec: dict, gap_ratios=None, mode: str = "from_rest"):
     """All sweeps of one curve (one sweep mode), as a self-describing dataset."""
     # imported here: the figures and tables import this module for its grids and names, and should not
     # pay for the kernels, scipy and xarray (about 0.7 s of every such job's start)
-    from impact.engine.paper import sweep
-    from impact.outputs.datasets import curve_dataset
-    from impact.stages.readings import add_readings
 
     gaps = gap_grid(cfg) if gap_ratios is None else np.asarray(gap_ratios, dtype=float)
     r = freq_grid(cfg)

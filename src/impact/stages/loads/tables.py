@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pandas as pd
 import xarray as xr
 
 from impact.model.building import Building
@@ -58,7 +59,6 @@ def row(load: Load, measures: dict, **lead) -> dict:
 
 def rows_dataset(rows: list[dict], lead: tuple) -> xr.Dataset:
     """Every family's runs as variables '<family>_<measure>' over (lead..., the family's labels)."""
-    import pandas as pd
 
     frame = pd.DataFrame(rows)
     parts = []
@@ -140,7 +140,6 @@ def _groups(out: dict):
 def best_damper_table(out: dict, measure: str = "peak_roof"):
     """One row per building, load group, intensity and mass ratio: each damper's mean ratio to the bare
     building (over the records, or the seeds), and the best damper."""
-    import pandas as pd
 
     rows = []
     for label, ds, over, intensity in _groups(out):
@@ -169,7 +168,6 @@ def verdict(ratio: float) -> str:
 def verdict_table(out: dict, measures=("peak_roof", "rms_roof", "peak_accel", "peak_drift")):
     """Per damper, mass ratio, load group and measure: how many single runs it helps (ratio < 0.95), leaves
     alone (within 5 %) or makes worse (> 1.05), the median ratio, and the worst case."""
-    import pandas as pd
 
     rows = []
     for label, ds, _, _ in _groups(out):

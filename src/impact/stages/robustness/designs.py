@@ -4,6 +4,7 @@ workflow's start-up and the collectors read it without loading numba."""
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
 
@@ -156,7 +157,6 @@ def grids(cfg: dict, tmd_beta_t: float) -> dict:
 
 def optima_from_sweeps(datasets) -> dict:
     """'cid' or 'rp<r'>' -> (start -> optimum gap ratio), from sweep datasets (their 'curve' attribute)."""
-    import json
 
 
     out = {}

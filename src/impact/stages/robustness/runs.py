@@ -7,6 +7,7 @@ import math
 from dataclasses import replace
 
 import numpy as np
+import xarray as xr
 
 from impact.engine.run import simulate
 from impact.model.building import Building
@@ -131,7 +132,6 @@ def design_dataset(design: Design, grids: dict, r_grid, protocol: Protocol, stro
     grids: variation name -> values (scale, drift, damping, e); the ones that do not apply are left out.
     stroke_cap (TMD only): also the smallest beta_t that keeps its stroke within it, and X_m then.
     """
-    import xarray as xr
 
     wanted = {name: np.asarray(grids[name], dtype=float) for name in applicable(design.kind) if name in grids}
     sweeps = sensitivity(design, r_grid, protocol, scales=wanted.get("scale", ()), drifts=wanted.get("drift", ()),

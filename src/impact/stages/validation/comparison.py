@@ -35,17 +35,20 @@ names its generator in ``source``.
 from __future__ import annotations
 
 import math
+import multiprocessing as mp
 import time
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from impact.stages.validation import rig as R
 from impact.stages.validation.analysis import (
     UnresolvedPeakError,
     beta_to_delta,
     count_impacts,
+    drop_test_restitution,
     half_power,
     impacts_per_cycle,
     log_decrement,
@@ -428,7 +431,6 @@ def _map(fn, items, processes: int):
     items = list(items)
     if processes <= 1 or len(items) <= 1:
         return [fn(it) for it in items]
-    import multiprocessing as mp
 
     warm_up()
     ctx = mp.get_context("fork")
@@ -466,7 +468,6 @@ def fig3_data(cfg: dict | None = None, *, keep_records: bool = False) -> dict:
         for p in dc["points"][who]:
             for a, d in zip(p["amplitude"], p["delta"]):
                 decay_rows.append({"source": who, "x0_mm": p["x0_mm"], "amplitude_mm": float(a), "delta": float(d)})
-    import pandas as pd
 
     decay = pd.DataFrame(decay_rows, columns=["source", "x0_mm", "amplitude_mm", "delta"])
     means = {who: float(np.mean(decay.loc[decay.source == who, "delta"])) if (decay.source == who).any()
@@ -506,7 +507,6 @@ def fig5_data(cfg: dict | None = None, *, keep_records: bool = False) -> dict:
     The paper does not give mu, d or r' of these panels: they are configuration
     (``figures.fig5a``, ``figures.fig5b``).
     """
-    import pandas as pd
 
     cfg = validation_config(cfg) if "grid" not in (cfg or {}) else cfg
     fa = cfg["figures"]["fig5a"]
@@ -545,9 +545,7 @@ def fig5_data(cfg: dict | None = None, *, keep_records: bool = False) -> dict:
 
 def drop_tests(cfg: dict) -> tuple[list[Measurement], "Any"]:
     """Synthetic drop-test records for every ball and wall, and e recovered by Eq. (3b)."""
-    import pandas as pd
 
-    from impact.stages.validation.analysis import drop_test_restitution
 
     recs, rows = [], []
     for wall in cfg["grid"]["walls"]:
@@ -567,7 +565,6 @@ def ablation(cfg: dict | None = None, cases=None, variants: dict | None = None, 
     Returns a DataFrame: one row per (case, variant) with the error columns of
     :func:`run_case`.
     """
-    import pandas as pd
 
     cfg = validation_config(cfg) if "grid" not in (cfg or {}) else cfg
     cases = [Case.of(c) for c in (cases or cfg["ablation"]["cases"])]

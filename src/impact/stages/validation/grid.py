@@ -16,15 +16,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable
 
+import jsonschema
 import numpy as np
+import yaml
 
 SCHEMA_PATH = Path(__file__).with_name("rig.schema.yaml")
 
 
 @functools.cache
 def _validator():
-    import jsonschema
-    import yaml
 
     schema = yaml.safe_load(SCHEMA_PATH.read_text())
     base = jsonschema.Draft7Validator

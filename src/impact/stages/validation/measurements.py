@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import netCDF4
 import numpy as np
 
 from impact.outputs.files import atomic_path
@@ -466,7 +467,6 @@ def _csv_text(record: Measurement) -> str:
 
 
 def _read_netcdf(path: Path) -> tuple[dict[str, Any], list[str], dict[str, np.ndarray]]:
-    import netCDF4
 
     try:
         ds = netCDF4.Dataset(path, "r")
@@ -484,7 +484,6 @@ def _read_netcdf(path: Path) -> tuple[dict[str, Any], list[str], dict[str, np.nd
 
 
 def _write_netcdf(tmp: str, record: Measurement) -> None:
-    import netCDF4
 
     with netCDF4.Dataset(tmp, "w", format="NETCDF4") as ds:
         n = next(iter(record.columns.values())).size

@@ -9,6 +9,7 @@ bare structure (mu = 0) is its exact closed form.
 
 from __future__ import annotations
 
+import fcntl
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -18,7 +19,7 @@ from numba import njit
 
 from impact.engine import paper_loop as K
 from impact.engine.contact import STICK_VELOCITY
-from impact.engine.jitcache import purge_stale_cache
+from impact.engine.jitcache import _cache_dir, purge_stale_cache
 from impact.engine.paper import ensure_compiled, initial_state, pid_data
 from impact.engine.paper import param_vector as model_param_vector
 from impact.engine.sampler import paper_free_flight, paper_state
@@ -311,9 +312,7 @@ def warm_up_model():
     global _WARM
     if _WARM:
         return
-    import fcntl
 
-    from impact.engine.jitcache import _cache_dir
 
     ensure_compiled("pid")
     folder = _cache_dir()

@@ -4,15 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-
-def _pyplot():
-    """matplotlib's pyplot on the file-only Agg backend (no display on a cluster node)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+# pyplot as the outputs layer sets it up, on the file-only Agg backend (no display on a cluster node)
+from impact.outputs.plotting import plt, save_atomic
 
 
 def _sweep_axes(ax, title):
@@ -23,7 +16,6 @@ def _sweep_axes(ax, title):
 
 def _finish(fig, paths, axes=()) -> list[Path]:
     """Legends and grids on `axes`, the synthetic-data note, then write every path and close."""
-    plt = _pyplot()
     for ax in axes:
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
@@ -35,8 +27,6 @@ def _finish(fig, paths, axes=()) -> list[Path]:
 
 
 def _save(fig, paths) -> list[Path]:
-    from impact.outputs.plotting import save_atomic
-
     out = []
     for p in paths:
         save_atomic(fig, p)
@@ -49,7 +39,6 @@ SYNTH_NOTE = "synthetic: virtual rig vs Eq. (4) model -- not the paper's measure
 
 def plot_fig3(data: dict, paths) -> list[Path]:
     """Fig. 3 analogue: (a) delta vs amplitude of the bare structure's free decays; (b) sweep + half-power."""
-    plt = _pyplot()
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
     dec = data["decay"]
     rig = dec[dec.source == "rig"]
@@ -76,7 +65,6 @@ def plot_fig3(data: dict, paths) -> list[Path]:
 
 def plot_fig5(data: dict, paths) -> list[Path]:
     """Fig. 5 analogue: (a) delta - delta_bare vs amplitude (steel walls); (b) sweep (1.0 mm rubber)."""
-    plt = _pyplot()
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
     a = data["a"]["data"]
     for who, m, c in (("rig", ".", "C0"), ("model", "x", "C3")):
@@ -103,7 +91,6 @@ def plot_fig5(data: dict, paths) -> list[Path]:
 
 def plot_histories(data: dict, paths) -> list[Path]:
     """Fig. 4 analogue: the rig's and the model's records at the Fig. 5(b) extra points."""
-    plt = _pyplot()
     hist = data["b"]["histories"]
     n = max(len(hist), 1)
     fig, axes = plt.subplots(n, 1, figsize=(9, 2.2 * n), squeeze=False)

@@ -84,6 +84,7 @@ import numpy as np
 from numba import njit
 from scipy import integrate, optimize
 
+from impact.engine.jitcache import compile_lock
 from impact.stages.validation.grid import validation_config
 from impact.stages.validation.measurements import Measurement, make_measurement
 
@@ -743,7 +744,6 @@ def warm_up() -> None:
     global _WARM
     if _WARM:
         return
-    from impact.engine.jitcache import compile_lock
 
     with compile_lock():
         spec = rig_spec(mu=0.0129, gap_mm=30.0, rp=1.0, wall="steel")

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Iterable
 
 import numpy as np
+import pandas as pd
 
 from impact.outputs.files import write_text_atomic
 from impact.stages.validation.claims import evaluate_claims, jsonable
@@ -97,7 +98,6 @@ def read_case(path) -> CaseResult:
 
 def grid_tables(results: Iterable[CaseResult]):
     """The grid's three tables: one row per case, per case and r, per case and amplitude bin."""
-    import pandas as pd
 
     results = list(results)
     return (pd.DataFrame([r.row for r in results]), pd.DataFrame([row for r in results for row in r.curve]),
@@ -126,7 +126,6 @@ def write_fig3_data(cfg: dict, data, decay, sweep, records: dict) -> dict:
 
     records: a folder for each of FIG3_RECORDS.
     """
-    import pandas as pd
 
     f3 = fig3_data(cfg, keep_records=True)
     write_csv(f3["decay"], decay)
@@ -143,7 +142,6 @@ def write_fig3_data(cfg: dict, data, decay, sweep, records: dict) -> dict:
 
 
 def read_fig3_data(path) -> dict:
-    import pandas as pd
 
     data = json.loads(Path(path).read_text())
     return {**data, "decay": pd.DataFrame(data["decay"])}
@@ -167,7 +165,6 @@ def write_fig5_data(cfg: dict, data, decay, sweep, records: dict) -> dict:
 
 
 def read_fig5_data(path) -> dict:
-    import pandas as pd
 
     data = json.loads(Path(path).read_text())
     b = data["b"]
@@ -193,7 +190,6 @@ def claims_of(cfg: dict, table, curves, fig3: dict | None, fig5: dict | None, dr
 
 
 def write_claims(cfg: dict, table, curves, fig3, fig5, drops, out, *, smoke: bool) -> dict:
-    import pandas as pd
 
     def read(path):
         return pd.read_csv(path, float_precision="round_trip")  # every number as it was written
