@@ -73,7 +73,7 @@ Vectors = namedtuple("Vectors", "stack found qs vs v_before reduced moduli s_bef
 
 #: the events found on a segment, per unit: time, wall side, kind; what an instant's impacts did; and its
 #: scratch flags (units resting on a wall they touched, floors whose impacts are done)
-Events = namedtuple("Events", "t side kind hit impulse touched floor_done")
+Events = namedtuple("Events", "t side kind hit impulse touched floors_done")
 
 #: tables kept across segments: modal tables, a record step's tables, build_segment's scratch
 #: (floats, complexes) and the cache slot to replace next

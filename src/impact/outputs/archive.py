@@ -173,7 +173,6 @@ def _is_netcdf(name: str) -> bool:
 def environment() -> dict:
     from importlib.metadata import distributions
 
-
     dists = {}
     for d in distributions():
         name = d.metadata["Name"]

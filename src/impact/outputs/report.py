@@ -166,7 +166,6 @@ CONFIG_HASH_VARIABLE = "IMPACT_CONFIG_SHA256"
 def snakemake_report_metadata() -> dict:
     """The commit and configuration hash for the landing page of ``snakemake --report``."""
 
-
     state = git_state()
     return {"git_commit": state["git_commit"], "git_dirty": state["git_dirty"], "code_version": __version__,
             "config_sha256": os.environ.get(CONFIG_HASH_VARIABLE, "not given")}

@@ -158,7 +158,6 @@ def grids(cfg: dict, tmd_beta_t: float) -> dict:
 def optima_from_sweeps(datasets) -> dict:
     """'cid' or 'rp<r'>' -> (start -> optimum gap ratio), from sweep datasets (their 'curve' attribute)."""
 
-
     out = {}
     for ds in datasets:
         spec = json.loads(ds.attrs["curve"])

@@ -546,7 +546,6 @@ def fig5_data(cfg: dict | None = None, *, keep_records: bool = False) -> dict:
 def drop_tests(cfg: dict) -> tuple[list[Measurement], "Any"]:
     """Synthetic drop-test records for every ball and wall, and e recovered by Eq. (3b)."""
 
-
     recs, rows = [], []
     for wall in cfg["grid"]["walls"]:
         for mu in cfg["grid"]["mu"]:

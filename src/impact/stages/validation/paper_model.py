@@ -313,7 +313,6 @@ def warm_up_model():
     if _WARM:
         return
 
-
     ensure_compiled("pid")
     folder = _cache_dir()
     folder.mkdir(parents=True, exist_ok=True)
