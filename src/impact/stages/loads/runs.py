@@ -10,8 +10,8 @@ import xarray as xr
 
 from impact.engine.scenes import simulate_scene
 from impact.model.building import Building
-from impact.model.records import load_record
 from impact.model.scene import Damper, GroundMotion, Scene
+from impact.model.suites import record_by_key
 from impact.stages.loads.plan import (
     IMPACT_RECORDS,
     RESPONSES,
@@ -131,7 +131,7 @@ def time_history(cfg: dict, building_name: str, record: str, kind: str, mass_rat
     building = make_building(cfg, building_name)
     pga = cfg["records"]["design_pga_g"]
     load = Load("records", {"record": record, "intensity": pga},
-                GroundMotion.from_record(load_record(record), pga_g=pga))
+                GroundMotion.from_record(record_by_key(record), pga_g=pga))
     damper = _impact(cfg, kind, building, mass_ratio, gap_ratio, bare, load)
     times = np.arange(0.0, load.load.duration, building.period1 / samples_per_period)
     roof = building.storeys - 1
