@@ -233,3 +233,22 @@ def test_a_single_storey_building_of_the_period_asked_is_the_oscillator_sa_reads
     res = simulate_scene(Scene(Building.uniform(1, 1.0, 0.05), (), GroundMotion.from_record(rec)))
     assert spectral_acceleration(rec, 1.0) == pytest.approx((2 * math.pi) ** 2 * res.peak_roof_displacement / G_GRAV,
                                                             rel=1e-15)
+
+
+def test_cli_lists_the_suites_and_runs_a_building_under_one_of_their_ground_motions(capsys):
+    import json
+
+    from impact.cli import main
+
+    main(["records", "--suite", "nearfield"])
+    rows = json.loads(capsys.readouterr().out)["nearfield"]
+    assert len(rows) == 56 and rows[0]["key"] == "fema-nearfield:1:a" and rows[0]["group"] == "near-field pulse"
+    main(["quake", "--record", "fema-farfield:12:a", "--storeys", "3", "--pga-g", "0.3", "--duration-s", "5"])
+    out = json.loads(capsys.readouterr().out)
+    assert out["record"]["metadata"]["event"] == "Landers" and out["record"]["pga_g"] == pytest.approx(0.3)
+    assert out["peak_roof_displacement_m"] > 0
+    for key, words in (("fema-farfield:23:a", "allowed [1, 22]"), ("fema-farfield:1", "fema-<suite>")):
+        with pytest.raises(SystemExit) as exc:
+            main(["quake", "--record", key])
+        err = capsys.readouterr().err
+        assert exc.value.code == 2 and key in err and words in err
