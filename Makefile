@@ -9,12 +9,14 @@ BIN    := $(VENV)/bin
 CORES  ?= 2
 STAMP  := $(VENV)/.installed
 
-.PHONY: setup study paper test smoke lint bench clean chromium
+.PHONY: setup study paper test smoke lint docs bench clean chromium
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet -e '.[workflow,test]'
+	$(BIN)/pip install --quiet -e '.[workflow,test,docs]'
+	@echo "compiling the engine's kernels into numba's cache, once (about 6 minutes on 2 cores)"
+	$(BIN)/impact compile > /dev/null
 	touch $(STAMP)
 
 setup: $(STAMP)
@@ -38,6 +40,11 @@ lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks workflow/scripts
 	$(BIN)/snakefmt --check Snakefile workflow
 	$(BIN)/snakemake --lint
+
+# the documentation site (the specification pages and the API reference), warnings as errors
+docs: $(STAMP)
+	$(BIN)/sphinx-build -W --keep-going -q -b html docs docs/_build/html
+	@echo "docs/_build/html/index.html"
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_core.py

@@ -335,7 +335,7 @@ def test_lambda_positive_for_damped_system():
 def test_resonance_band_matches_section9_table():
     """mu = 0.01, e = 0.5, r = 1: stable gaps inside 98-231 x_st, amplitude ratio 8-45."""
     gaps = np.arange(60.0, 280.0, 2.0)
-    stable = [(dx, s["upper"]["amplitude_ratio"]) for dx in gaps
+    stable = [(dx, s["upper"]["amplitude_over_static"]) for dx in gaps
               for s in [solve(0.01, 0.5, 1.0, dx)] if s["upper"]["stable"] or s["lower"]["stable"]]
     assert len(stable) >= 20
     d_band = [dx for dx, _ in stable]
@@ -350,9 +350,9 @@ def test_resonance_band_matches_section9_table():
 def test_section9_two_admissible_roots_example():
     """mu = 0.05, e = 0.5, r = 0.9, d = 27.72: stable 7.53 and unstable 3.61."""
     sol = solve(0.05, 0.5, 0.9, 27.72)
-    assert sol["upper"]["stable"] and sol["upper"]["amplitude_ratio"] == pytest.approx(7.53, abs=0.01)
+    assert sol["upper"]["stable"] and sol["upper"]["amplitude_over_static"] == pytest.approx(7.53, abs=0.01)
     assert sol["lower"]["admissible"] and not sol["lower"]["stable"]
-    assert sol["lower"]["amplitude_ratio"] == pytest.approx(3.61, abs=0.01)
+    assert sol["lower"]["amplitude_over_static"] == pytest.approx(3.61, abs=0.01)
     assert classify(0.05, 0.5, BETA, 0.9, 27.72 * XST, XST) == 3
 
 

@@ -122,3 +122,33 @@ def test_closed_form_statement_judges_all_three_values(hybrid, explains):
     text = closed_form_statement(table, dict(zip(curves, (0.25, 0.45, 0.65))))
     assert ("This reading explains the paper's values (hybrid, start left)" in text) == explains
     assert ("does not explain the paper's e-trend" in text) != explains
+
+
+def test_the_closed_form_at_the_simulated_optimum_gap_is_a_row_of_the_comparison():
+    """paper_vs_reproduced's reading of the CID e-trend: the stable 2-EIPC closed form's X_m taken at the gap where
+    the simulation (not the closed form) has its optimum, per start, judged against the paper's value."""
+    import pandas as pd
+    import xarray as xr
+
+    from impact.model.params import curve_id
+    from impact.stages.tables import X_M_AT_OPTIMUM, paper_vs_reproduced
+
+    gaps = [1.0, 1.6, 2.2]
+    curves = {}
+    for (_, _, spec, _), closed in zip(X_M_AT_OPTIMUM[:2], ([0.9, 0.33, 0.1], [0.9, math.nan, 0.1])):
+        curves[curve_id(spec)] = xr.Dataset(
+            {"X_m": (("start", "gap_ratio"), [[0.5, 0.3, 0.4], [0.2, 0.6, 0.7]]),
+             "X_m_refined": (("start", "gap_ratio"), [[0.5, 0.3, 0.4], [0.2, 0.6, 0.7]]),
+             "X_m_closed_form": ("gap_ratio", closed)}, coords={"start": ["centre", "left"], "gap_ratio": gaps})
+    table = paper_vs_reproduced(curves, None)
+    rows = table[table["quantity"] == "X_m of the 2-EIPC closed form at the simulated optimum g"]
+    assert len(rows) == 4
+    e25 = rows[rows["case"] == "CID mu=0.01 e=0.25"].set_index("start")
+    # the centre start's optimum is g = 1.6, where the closed form gives 0.33 against the paper's 0.32: agrees
+    assert e25.loc["centre", "g_optimum"] == 1.6 and e25.loc["centre", "reproduced"] == 0.33
+    assert bool(e25.loc["centre", "within_10pct"]) and e25.loc["centre", "reason"] == ""
+    # the left start's optimum is g = 1.0, where it gives 0.9: a miss, with its reason
+    assert e25.loc["left", "reproduced"] == 0.9 and not e25.loc["left", "within_10pct"]
+    e45 = rows[rows["case"] == "CID mu=0.01 e=0.45"].set_index("start")
+    assert math.isnan(e45.loc["centre", "reproduced"]) and "no stable 2-EIPC orbit" in e45.loc["centre", "reason"]
+    assert isinstance(table, pd.DataFrame)

@@ -46,10 +46,16 @@ STABLE_IDS = ["cid g=1", "cid g=0.5 e=0.65", "pid r'=1", "pid r'=0.5", "cid chat
 @pytest.mark.parametrize("case", STABLE_CASES, ids=STABLE_IDS)
 @pytest.mark.parametrize("start", ["centre", "left"])
 def test_one_storey_one_unit_reproduces_the_paper_kernel(case, start):
+    """Two exact kernels agree to round-off: to 1e-12, or, where the run is more sensitive than that (the chattering
+    cases: a phase nudged by 1e-15 moves their amplitude by up to 1e-12), to four times the spread such nudges make
+    in the paper kernel (each kernel's round-off path is one draw of that spread, and four nudges only sample it)."""
     system, r = case
     old = simulate(system, r, Protocol(start=start))
+    nudged = [simulate(dataclasses.replace(system, phase=system.phase + k * 1e-15), r, Protocol(start=start)).amplitude
+              for k in (-2, -1, 1, 2)]
+    sensitivity = max(abs(a - old.amplitude) for a in nudged) / old.amplitude
     new = simulate_scene(_as_scene(system, r, start))
-    assert amplitude(new) == pytest.approx(old.amplitude, rel=1e-12, abs=1e-15)
+    assert amplitude(new) == pytest.approx(old.amplitude, rel=max(1e-12, 4 * sensitivity), abs=1e-15)
     for key in ("impacts", "impacts_in_window", "sticking_episodes"):
         assert new.diagnostics[key] == old.diagnostics[key], key
     for key in ("work_input", "viscous_dissipation", "impact_losses", "friction_work"):
@@ -254,11 +260,23 @@ def test_at2_reader_reads_header_and_values(tmp_path):
     np.testing.assert_allclose(rec.scaled_to_pga(0.2), np.array([1, 2, -3, 4, 0, 1]) * 0.05)
 
 
+@pytest.mark.parametrize("units, one_in_g", [
+    ("G", 1.0), ("GAL (CM/S/S)", 980.665), ("CM/S2", 980.665), ("CM/SEC/SEC", 980.665), ("M/S/S", 9.80665),
+    ("M/S**2", 9.80665), ("IN/S/S", 9.80665 / 0.0254), ("IN/SEC2", 9.80665 / 0.0254),
+])
+def test_at2_values_are_read_in_the_unit_their_header_names(units, one_in_g):
+    """A record written in another unit is the same ground motion: its values are converted to g."""
+    rec = parse_at2(AT2.replace("UNITS OF G", f"UNITS OF {units}"))
+    assert rec.pga_g == pytest.approx(0.04 / one_in_g, rel=1e-15)
+
+
 @pytest.mark.parametrize("bad,match", [
+    (AT2.replace("UNITS OF G", "UNITS OF KG"), "line 3: .*unit of g, gal"),
+    (AT2.replace("UNITS OF G", "UNITS OF CM"), "line 3: .*unit of g, gal"),
+    (AT2.replace("IN UNITS OF G", "IN G"), "line 3"),
     (AT2.replace("NPTS=    6", "NPTS=    7"), "NPTS=7 but the file has 6 values"),
     (AT2.replace("NPTS=    6, DT=   .0100 SEC,", "6 .01"), "line 4"),
     (AT2.replace("-.3000000E-01", "-.30x0000E-01"), "line 5"),
-    (AT2.replace("UNITS OF G", "UNITS OF CM/S2").replace("G", "X"), "line 3"),
     ("\n".join(AT2.splitlines()[:3]), "4 header lines"),
 ])
 def test_malformed_at2_is_refused_naming_the_line(bad, match):

@@ -9,14 +9,27 @@ naming the flag and exit status 2.
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
 import os
 import sys
 
+from impact import __version__
 from impact.model.params import MAX_TUNING, STARTS, ParameterError, Protocol, System, ipc_label
 
 DEFAULTS = dict(mu=0.01, beta=0.0048, e=0.25, gap_ratio=1.0, force_ratio=0.096)
+
+
+class _Help(argparse.HelpFormatter):
+    """Every flag's help ends with its default, unless the help already says it (a kind-dependent default)."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        unset = action.default is None or action.default is False or action.default == argparse.SUPPRESS
+        if "default" in text or unset or not action.option_strings:
+            return text
+        return f"{text} (default %(default)s)"
 
 
 def _ranged(lo: float, hi: float, *, lo_open=False, hi_open=False, kind=float):
@@ -40,34 +53,34 @@ def _ranged(lo: float, hi: float, *, lo_open=False, hi_open=False, kind=float):
 def _model_flags(ap: argparse.ArgumentParser) -> None:
     g = ap.add_argument_group("model (model units: M = 1, omega = 1)")
     g.add_argument("--damper", choices=("cid", "pid"), default="cid",
-                   help="classical (free mass) or pendulum impact damper (default cid)")
+                   help="classical (free mass) or pendulum impact damper")
     g.add_argument("--mu", type=_ranged(0, 10, lo_open=True), default=DEFAULTS["mu"],
-                   help="mass ratio m/M, in (0, 10] (default 0.01)")
+                   help="mass ratio m/M, in (0, 10]")
     g.add_argument("--beta", type=_ranged(0, 1, lo_open=True, hi_open=True), default=DEFAULTS["beta"],
-                   help="structural damping ratio, in (0, 1) (default 0.0048)")
+                   help="structural damping ratio, in (0, 1)")
     g.add_argument("--e", type=_ranged(0, 1), default=DEFAULTS["e"],
-                   help="coefficient of restitution, in [0, 1] (default 0.25)")
+                   help="coefficient of restitution, in [0, 1]")
     g.add_argument("--gap-ratio", type=_ranged(0, 1e6), default=DEFAULTS["gap_ratio"],
-                   help="g = d / A_max, total clearance over the bare resonant amplitude, in [0, 1e6] (default 1)")
+                   help="g = d / A_max, total clearance over the bare resonant amplitude, in [0, 1e6]")
     g.add_argument("--rp", type=_ranged(0, 1e4, lo_open=True), default=None,
                    help="PID tuning r' = omega_p/omega, in (0, 1e4] (default 1.0 for the PID; not used by the CID)")
     g.add_argument("--force-ratio", type=_ranged(0, 1e12, lo_open=True), default=DEFAULTS["force_ratio"],
-                   help="F0/K, static deflection under the force amplitude, > 0 (default 0.096)")
+                   help="F0/K, static deflection under the force amplitude, > 0")
     g.add_argument("--phase", type=_ranged(-2 * math.pi, 2 * math.pi), default=0.0,
-                   help="force phase phi in F0 sin(Omega t + phi), in [-2pi, 2pi] (default 0)")
+                   help="force phase phi in F0 sin(Omega t + phi), in [-2pi, 2pi]")
     g.add_argument("--nu", type=_ranged(0, 100), default=0.0,
-                   help="Coulomb friction coefficient under the CID's mass, in [0, 100] (default 0: frictionless)")
+                   help="Coulomb friction coefficient under the CID's mass, in [0, 100] (0: frictionless)")
     g.add_argument("--frequency-hz", type=_ranged(0, 1e6, lo_open=True), default=1.5,
-                   help="structure frequency in Hz; sets the friction scale only (default 1.5)")
+                   help="structure frequency in Hz; sets the friction scale only")
     g.add_argument("--unit-m", type=_ranged(0, 1e6, lo_open=True), default=0.01,
-                   help="length of one model unit in metres; sets the friction scale only (default 0.01)")
+                   help="length of one model unit in metres; sets the friction scale only")
     p = ap.add_argument_group("protocol (model.md, 'Response protocol')")
     p.add_argument("--start", choices=STARTS, default="centre",
-                   help="damper mass's initial place, structure at rest (default centre)")
+                   help="damper mass's initial place, structure at rest")
     p.add_argument("--periods", type=_ranged(0, 1e7, lo_open=True), default=500.0,
-                   help="natural periods simulated, > 0 (default 500)")
+                   help="natural periods simulated, > 0")
     p.add_argument("--average-from", type=_ranged(0, 1e7), default=250.0,
-                   help="the amplitude window starts after this many periods, < --periods (default 250)")
+                   help="the amplitude window starts after this many periods, < --periods")
 
 
 def _system(args) -> System:
@@ -94,6 +107,36 @@ def _finite(obj):
     return obj
 
 
+#: impacts kept for a drawn run (more are counted, not drawn); the samples of its time history
+PLOT_IMPACTS = 50_000
+PLOT_SAMPLES = 20_000
+
+
+def _plotted(scene, step: float) -> dict:
+    """simulate()'s keywords that also return what --plot draws: samples every `step` (at most PLOT_SAMPLES)
+    and the impact records.  The plotted run is the run reported: it then runs on the scene loop."""
+    import numpy as np
+
+    times = np.linspace(0.0, scene.t_end, min(PLOT_SAMPLES, int(scene.t_end / step) + 1))
+    return {"measures": ("amplitude", "impacts", "samples", "records"), "record": PLOT_IMPACTS, "times": times}
+
+
+def _plot(path: str, scene, res, title: str, length_unit: str, impulse_unit: str, roof_bare=None) -> None:
+    """Draw a run's time history (the roof, the first damper unit's stroke between its walls, its impacts)."""
+    from impact.outputs.datasets import time_history_dataset
+    from impact.outputs.plotting import plot_time_history
+
+    damper = scene.dampers[0]
+    floor = (damper.floor or scene.building.storeys) - 1
+    q = res.samples["q"]
+    stroke = q[:, scene.building.storeys] - q[:, floor]
+    plot_time_history(time_history_dataset(res.samples["t"], q[:, scene.building.storeys - 1], stroke,
+                                           0.5 * damper.gap if damper.has_walls else float("nan"),
+                                           res.records["t"], res.records["impulse"], length_unit=length_unit,
+                                           impulse_unit=impulse_unit, title=title, kind=damper.kind,
+                                           roof_bare=roof_bare), [path])
+
+
 def cmd_run(args) -> dict:
     """One run of the paper's structure; with --units N > 1 the damper is N units of mass mu/N, gap d each.
 
@@ -103,7 +146,11 @@ def cmd_run(args) -> dict:
     from impact.model.scene import paper_scene_from_system
 
     system = _system(args)
-    res = simulate(paper_scene_from_system(system, args.r, _protocol(args), units=args.units))
+    scene = paper_scene_from_system(system, args.r, _protocol(args), units=args.units)
+    plotted = _plotted(scene, 2.0 * math.pi / args.r / 20) if args.plot else {}
+    res = simulate(scene, **plotted)
+    if args.plot:
+        _plot(args.plot, scene, res, f"impact {' '.join(sys.argv[1:])}", "1", "1")
     cycles = res.window_span * args.r / (2.0 * math.pi)
     aipc = res.diagnostics["impacts_in_window"] / args.units / cycles if math.isfinite(res.amplitude) else math.nan
     out = {"damper": system.kind, "units": args.units, "parameters": system.as_dict(), "gap": system.gap,
@@ -137,7 +184,9 @@ def _quake_record(args):
 QUAKE_DAMPER_FLAGS = {"none": (), "cid": ("mu", "gap_m", "e", "nu", "units", "floor", "start"),
                       "pid": ("mu", "gap_m", "e", "rp", "damping", "units", "floor", "start"),
                       "tmd": ("mu", "tuning", "damping", "units", "floor")}
-QUAKE_DEFAULTS = dict(mu=0.02, e=0.5, rp=1.0, tuning=1.0, damping=0.0, nu=0.0, units=1, start="centre")
+#: the earthquake study's damper (config/config.yaml, loads: its larger mass ratio, e = 0.25, r' = 1), where impact
+#: run's are the paper's (mu = 0.01): a building's damper is sized against the building, not the paper's model
+QUAKE_DEFAULTS = dict(mu=0.02, e=DEFAULTS["e"], rp=1.0, tuning=1.0, damping=0.0, nu=0.0, units=1, start="centre")
 #: the Damper field each flag sets (--mu and --start set the mass and the Scene's start instead)
 _DAMPER_FIELD = dict(gap_m="gap", e="e", rp="tuning", tuning="tuning", damping="damping", nu="nu", units="units",
                      floor="floor")
@@ -165,7 +214,7 @@ def _quake_damper(args, flags: dict, total_mass: float):
 
 def cmd_quake(args) -> dict:
     """A shear building under a ground-motion record, with or without a damper at one floor."""
-    from impact.engine.scenes import simulate_scene
+    from impact.engine.run import simulate
     from impact.model.building import Building
     from impact.model.scene import GroundMotion, Scene
 
@@ -181,7 +230,15 @@ def cmd_quake(args) -> dict:
         dampers = (_quake_damper(args, flags, building.total_mass),)
     load = GroundMotion.from_record(record, pga_g=args.pga_g)
     scene = Scene(building, dampers, load, duration=args.duration_s, start=flags.get("start", "centre"))
-    res = simulate_scene(scene)
+    if args.plot and not dampers:
+        raise ParameterError("--plot draws a damper's strokes and impacts: give --damper cid, pid or tmd")
+    plotted = _plotted(scene, building.period1 / 50) if args.plot else {}
+    res = simulate(scene, **plotted)
+    if args.plot:
+        bare = simulate(Scene(building, (), load, duration=args.duration_s), measures=("samples",),
+                        times=plotted["times"])
+        _plot(args.plot, scene, res, f"impact {' '.join(sys.argv[1:])}", "m", "N s",
+              roof_bare=bare.samples["q"][:, building.storeys - 1])
     out = {"record": {"name": record.name, "source": record.source, "dt_s": record.dt, "npts": record.npts,
                       "pga_g": load.pga / 9.80665, **({"metadata": record.metadata} if record.metadata else {})},
            "building": building.as_dict(), "damper": args.damper,
@@ -204,9 +261,12 @@ def cmd_sweep(args) -> dict:
 
     if args.r_max < args.r_min:
         raise ParameterError(f"--r-max = {args.r_max} is below --r-min = {args.r_min}")
+    grid = frequency_grid(args.r_min, args.r_max, args.r_step)
+    if len(grid) < 2:
+        raise ParameterError(f"--r-step = {args.r_step} leaves one frequency between --r-min = {args.r_min} and "
+                             f"--r-max = {args.r_max}: a sweep needs two or more (allowed: --r-step <= r_max - r_min)")
     system = _system(args)
     protocol = _protocol(args)
-    grid = frequency_grid(args.r_min, args.r_max, args.r_step)
     result = sweep(system, grid, protocol, progress=True)
     out = {
         "damper": system.kind,
@@ -286,11 +346,13 @@ def cmd_masri(args) -> dict:
 
     gap = args.gap_ratio * a_max(args.beta, args.force_ratio)
     sol = masri_2eipc(args.mu, args.e, args.beta, args.r, gap, force_ratio=args.force_ratio)
-    keys = ("exists", "admissible", "stable", "tau", "amplitude_ratio", "u", "eigenvalue_moduli")
+    keys = ("exists", "admissible", "stable", "tau", "amplitude", "amplitude_over_static", "u", "eigenvalue_moduli")
+    amax = a_max(args.beta, args.force_ratio)
     out = {"mu": args.mu, "e": args.e, "beta": args.beta, "r": args.r, "gap_ratio": args.gap_ratio,
-           "gap": gap, "force_ratio": args.force_ratio}
+           "gap": gap, "force_ratio": args.force_ratio, "a_max": amax}
     for root in ("upper", "lower"):
-        out[root] = {k: sol[root][k] for k in keys}
+        # amplitude_ratio is X / A_max here as in impact run and sweep; X / (F0/K) is amplitude_over_static
+        out[root] = {**{k: sol[root][k] for k in keys}, "amplitude_ratio": sol[root]["amplitude"] / amax}
     return out
 
 
@@ -298,6 +360,8 @@ def cmd_verify_archive(args) -> dict:
     """Re-check an archive against its manifest: exit 1 naming each differing entry on stderr."""
     from impact.outputs.archive import archive_summary, check_archive
 
+    if not os.path.isfile(args.file):
+        raise ParameterError(f"{args.file}: no such archive (give results/archive/impact-study-<commit>.tar.gz)")
     problems = check_archive(args.file)
     for path, reason in problems:
         print(f"{path}: {reason}", file=sys.stderr)
@@ -306,17 +370,59 @@ def cmd_verify_archive(args) -> dict:
     return archive_summary(args.file)
 
 
+def cmd_compile(args) -> dict:
+    """Compile every kernel the study runs into numba's on-disk cache, once (make setup runs it): each
+    specialisation of the scene loop, the paper loop for each damper, the virtual test rig."""
+    import itertools
+    import time
+
+    import numpy as np
+
+    from impact.engine.paper import ensure_compiled
+    from impact.engine.scenes import simulate_scene
+    from impact.model.building import Building
+    from impact.model.scene import Damper, GroundMotion, Harmonic, Scene
+    from impact.stages.validation.rig import warm_up
+
+    start = time.perf_counter()
+    building = Building.uniform(1, 1.0, 0.05)
+    mass = 0.02 * building.total_mass
+    loads = (Harmonic(1e3, building.omega1), GroundMotion(np.array([0.0, 1.0, -1.0, 0.0]), 0.1))
+    for springs, friction, load in itertools.product((False, True), (False, True), loads):
+        dampers = [Damper("cid", mass, gap=0.01, e=0.5, nu=0.1 if friction else 0.0)]
+        if springs:
+            dampers.append(Damper("pid", mass, gap=0.01, e=0.5))
+        simulate_scene(Scene(building, tuple(dampers), load, duration=0.5))
+    for kind, friction in (("cid", False), ("cid", True), ("pid", False)):
+        ensure_compiled(kind, friction)
+    warm_up()
+    return {"compiled": "every kernel of the study", "cache": os.fspath(_cache_folder()),
+            "seconds": round(time.perf_counter() - start, 1)}
+
+
+def _cache_folder():
+    from impact.engine.jitcache import _cache_dir
+
+    return _cache_dir()
+
+
+PLOT_HELP = ("also draw the run in time to FILE (.png, .pdf or .svg): the roof, the damper mass between its walls and "
+             "its impacts; the run reported is the run drawn")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="impact", description=__doc__.split("\n\n")[0],
-                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    ap = argparse.ArgumentParser(prog="impact", description=__doc__.split("\n\n")[0], formatter_class=_Help)
+    ap.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = ap.add_subparsers(dest="command", required=True)
+    sub.add_parser = functools.partial(sub.add_parser, formatter_class=_Help)
 
     run = sub.add_parser("run", help="simulate one case under the response protocol")
     _model_flags(run)
     run.add_argument("--r", type=_ranged(0, 100, lo_open=True), default=1.0,
-                     help="frequency ratio Omega/omega, in (0, 100] (default 1.0)")
+                     help="frequency ratio Omega/omega, in (0, 100]")
     run.add_argument("--units", type=_ranged(1, 60, kind=int), default=1,
                      help="split the damper into N identical units of mass mu/N with the same gap, in [1, 60]")
+    run.add_argument("--plot", metavar="FILE", default=None, help=PLOT_HELP)
     run.set_defaults(func=cmd_run)
 
     qk = sub.add_parser("quake", help="a shear building under a ground-motion record (SI units)")
@@ -336,7 +442,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="mass of each floor in kg (only ratios matter to the response)")
     qk.add_argument("--damper", choices=("none", "cid", "pid", "tmd"), default="none", help="the damper")
     qk.add_argument("--mu", type=_ranged(0, 10, lo_open=True), default=None,
-                    help=f"damper mass over the building's total mass, in (0, 10] (default {QUAKE_DEFAULTS['mu']})")
+                    help=f"damper mass over the building's total mass, in (0, 10] (default {QUAKE_DEFAULTS['mu']}: the "
+                         "earthquake study's larger mass ratio; impact run's 0.01 is the paper's)")
     qk.add_argument("--gap-m", type=_ranged(0, 1e3), default=None, help="total clearance d in metres (CID, PID)")
     qk.add_argument("--e", type=_ranged(0, 1), default=None,
                     help=f"coefficient of restitution (CID, PID), in [0, 1] (default {QUAKE_DEFAULTS['e']})")
@@ -359,6 +466,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help=f"a CID's or PID's mass's initial place (default {QUAKE_DEFAULTS['start']})")
     qk.add_argument("--duration-s", type=_ranged(0, 1e6, lo_open=True), default=None,
                     help="simulated time in seconds (default: the record's length)")
+    qk.add_argument("--plot", metavar="FILE", default=None, help=PLOT_HELP + "; with the bare building's roof")
     qk.add_argument("--json", action="store_true", help="print one JSON object (the only output format)")
     qk.set_defaults(func=cmd_quake)
 
@@ -368,9 +476,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     sw = sub.add_parser("sweep", help="one frequency sweep: x_max and X_m = x_max / A_max")
     _model_flags(sw)
-    sw.add_argument("--r-min", type=_ranged(0, 100, lo_open=True), default=0.9, help="lowest r (default 0.9)")
-    sw.add_argument("--r-max", type=_ranged(0, 100, lo_open=True), default=1.1, help="highest r (default 1.1)")
-    sw.add_argument("--r-step", type=_ranged(0, 10, lo_open=True), default=0.005, help="step of r (default 0.005)")
+    sw.add_argument("--r-min", type=_ranged(0, 100, lo_open=True), default=0.9, help="lowest r")
+    sw.add_argument("--r-max", type=_ranged(0, 100, lo_open=True), default=1.1, help="highest r")
+    sw.add_argument("--r-step", type=_ranged(0, 10, lo_open=True), default=0.005, help="step of r")
     sw.add_argument("--out", default=None, help="write the sweep as a netCDF dataset to this path")
     sw.set_defaults(func=cmd_sweep)
 
@@ -398,6 +506,9 @@ def build_parser() -> argparse.ArgumentParser:
     ms.add_argument("--force-ratio", type=_ranged(0, 1e12, lo_open=True), default=DEFAULTS["force_ratio"],
                     help="F0/K")
     ms.set_defaults(func=cmd_masri)
+
+    cp = sub.add_parser("compile", help="compile every kernel the study runs, once (make setup does)")
+    cp.set_defaults(func=cmd_compile)
 
     va = sub.add_parser("verify-archive", help="re-check a study archive against its MANIFEST.json (exit 1 if any entry differs)")
     va.add_argument("file", help="the archive, results/archive/impact-study-<commit>.tar.gz")

@@ -2,7 +2,7 @@
 import xarray as xr
 
 from impact.outputs.files import write_dataset
-from impact.outputs.job_log import logged
+from impact.outputs.job_log import job_config, logged
 from impact.stages.design import chart_config, impact_chart, tmd_chart, tmd_mu_grid
 from impact.stages.sweeps import freq_grid
 
@@ -15,4 +15,4 @@ with logged(snakemake.log[0]) as log:
     else:
         chart = impact_chart(kind, [xr.load_dataset(p) for p in snakemake.input.sweeps])
     log.info("%s chart: X_m %.4f to %.4f", kind, float(chart["X_m"].min()), float(chart["X_m"].max()))
-    write_dataset(chart, snakemake.output[0])
+    write_dataset(chart, snakemake.output[0], config=job_config(snakemake))

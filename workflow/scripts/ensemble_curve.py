@@ -3,7 +3,7 @@ import json
 
 from impact.model.params import Protocol
 from impact.outputs.files import write_dataset
-from impact.outputs.job_log import log_versions, logged
+from impact.outputs.job_log import job_config, log_versions, logged
 from impact.outputs.provenance import attributes
 from impact.stages.coexistence import ensemble_members, run_ensemble
 
@@ -15,7 +15,7 @@ with logged(snakemake.log[0]) as log:
     members = ensemble_members(int(ens.get("members", 16)), int(ens.get("seed", 20261122)))
     protocol = Protocol(periods=cfg["protocol"]["periods"], average_from=cfg["protocol"]["average_from"])
     ds = run_ensemble(cfg, study["spec"], members, protocol)
-    ds.attrs.update(title="Initial-condition ensemble of a CID curve", Conventions="CF-1.10",
+    ds.attrs.update(title="Initial-condition ensemble of a CID curve",
                     seed=int(ens.get("seed", 20261122)), parameters=json.dumps(study["spec"]),
                     config=json.dumps(cfg, sort_keys=True), **attributes())
-    write_dataset(ds, snakemake.output[0])
+    write_dataset(ds, snakemake.output[0], config=job_config(snakemake))

@@ -2,7 +2,7 @@
 import xarray as xr
 
 from impact.outputs.files import write_dataset
-from impact.outputs.job_log import log_versions, logged
+from impact.outputs.job_log import job_config, log_versions, logged
 from impact.stages.ida.runs import damper_runs, design_gap_ratios
 
 with logged(snakemake.log[0]) as log:
@@ -13,4 +13,4 @@ with logged(snakemake.log[0]) as log:
                      gap_ratios)
     log.info("%s %s: gap ratios %s; %d runs stopped at the event cap", wc.building, wc.damper, gap_ratios,
              int(ds["event_cap_reached"].sum()))
-    write_dataset(ds, snakemake.output[0])
+    write_dataset(ds, snakemake.output[0], config=job_config(snakemake))

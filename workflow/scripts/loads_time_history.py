@@ -2,7 +2,7 @@
 import xarray as xr
 
 from impact.outputs.files import write_dataset
-from impact.outputs.job_log import log_versions, logged
+from impact.outputs.job_log import job_config, log_versions, logged
 from impact.stages.loads.runs import time_history
 
 with logged(snakemake.log[0]) as log:
@@ -14,4 +14,4 @@ with logged(snakemake.log[0]) as log:
     ds = time_history(study, case["building"], case["record"], case["damper"], case["mass_ratio"], gap_ratio,
                       xr.load_dataset(snakemake.input.bare[0]))
     log.info("%d impacts", ds.sizes["impact"])
-    write_dataset(ds, snakemake.output[0])
+    write_dataset(ds, snakemake.output[0], config=job_config(snakemake))

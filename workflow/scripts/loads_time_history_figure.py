@@ -2,7 +2,7 @@
 import xarray as xr
 
 from impact.outputs.job_log import logged
-from impact.outputs.plotting import plot_loads_time_history
+from impact.outputs.plotting import plot_time_history
 
 with logged(snakemake.log[0]):
-    plot_loads_time_history(xr.load_dataset(snakemake.input.dataset), [snakemake.output.png, snakemake.output.pdf])
+    plot_time_history(xr.load_dataset(snakemake.input.dataset), [snakemake.output.png, snakemake.output.pdf])

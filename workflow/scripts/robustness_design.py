@@ -3,7 +3,7 @@ import json
 
 from impact.model.params import Protocol
 from impact.outputs.files import write_dataset
-from impact.outputs.job_log import log_versions, logged
+from impact.outputs.job_log import job_config, log_versions, logged
 from impact.stages.robustness.designs import Design, grids, stroke_cap
 from impact.stages.robustness.runs import design_dataset
 from impact.stages.sweeps import freq_grid
@@ -17,4 +17,4 @@ with logged(snakemake.log[0]) as log:
     cap = stroke_cap(designs) if design.kind == "tmd" else None
     ds = design_dataset(design, grids(study, designs["tmd"]["damping"]), freq_grid(study), protocol, stroke_cap=cap)
     log.info("%s: X_m %.4f at the design point", snakemake.wildcards.design, float(ds["X_m_design"]))
-    write_dataset(ds, snakemake.output[0])
+    write_dataset(ds, snakemake.output[0], config=job_config(snakemake))

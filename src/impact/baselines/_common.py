@@ -24,21 +24,32 @@ V_STICK = 1e-7
 class BaselineResult:
     """What every baseline returns (model units).
 
-    impact_times      times of the impacts (ivp / rk4: located events; moreau: the end of a step
-                      in which a wall impulse was applied; penalty: contact entry)
-    impact_side       +1 right wall (s = +d/2), -1 left wall
-    pre, post         (n, 2) arrays of (x', y') just before / after each impact; penalty: at contact
-                      entry / exit (NaN post if the run ends in contact); moreau: at the start / end
-                      of the impulse step
-    t_end             time reached (the requested t_end unless the run failed)
-    final_state       (x, x', y, y') at t_end
-    amplitude         sqrt(2) * RMS of x over [t_window, t_end] (NaN if the run failed)
-    n_impacts_window  impacts with t >= t_window
-    nfev              right-hand-side (smooth force) evaluations
-    n_steps           accepted integration steps
-    max_penetration   largest |s| - d/2 seen at step points (negative: the walls were never reached)
-    status            'ok' or 'failed: <reason>'
-    method            short name of the method and its main setting
+    impact_times
+        times of the impacts (ivp / rk4: located events; moreau: the end of a step in which a wall impulse was
+        applied; penalty: contact entry)
+    impact_side
+        +1 right wall (s = +d/2), -1 left wall
+    pre, post
+        (n, 2) arrays of (x', y') just before / after each impact; penalty: at contact entry / exit (NaN post if the
+        run ends in contact); moreau: at the start / end of the impulse step
+    t_end
+        time reached (the requested t_end unless the run failed)
+    final_state
+        (x, x', y, y') at t_end
+    amplitude
+        sqrt(2) * RMS of x over [t_window, t_end] (NaN if the run failed)
+    n_impacts_window
+        impacts with t >= t_window
+    nfev
+        right-hand-side (smooth force) evaluations
+    n_steps
+        accepted integration steps
+    max_penetration
+        largest abs(s) - d/2 seen at step points (negative: the walls were never reached)
+    status
+        'ok' or 'failed: <reason>'
+    method
+        short name of the method and its main setting
     """
 
     impact_times: np.ndarray

@@ -193,10 +193,14 @@ def simulate_rk4(system: System, r: float, t_end: float, t_window: float, start:
                  h_stick: float = H_STICK):
     """Fixed-step RK4 with Hermite-interpolated impact location (see the module docstring).
 
-    dt          step size (model time units)
-    max_impacts cap on impacts (plus merges); exceeding it fails the run
-    v_stick     rebound speed below which the masses merge (default 1e-7 * force_ratio)
-    h_stick     rebounds flying less high than h_stick * (|x| + d/2) also merge (default 1e-10)
+    dt
+        step size (model time units)
+    max_impacts
+        cap on impacts (plus merges); exceeding it fails the run
+    v_stick
+        rebound speed below which the masses merge (default 1e-7 * force_ratio)
+    h_stick
+        rebounds flying less high than h_stick * (abs(x) + d/2) also merge (default 1e-10)
     """
     check_inputs(system, r, t_end, t_window, start)
     dt = float(dt)

@@ -305,11 +305,16 @@ def simulate_ivp(system: System, r: float, t_end: float, t_window: float, start:
                  v_stick: float | None = None, h_stick: float = H_STICK):
     """Event-driven solve_ivp baseline (see the module docstring).
 
-    method      'RK45', 'DOP853', 'Radau', 'LSODA' (also 'BDF', 'RK23')
-    rtol, atol  solve_ivp tolerances; atol defaults to rtol * force_ratio
-    max_impacts cap on wall impacts (plus merges); exceeding it fails the run
-    v_stick     rebound speed below which the masses merge (default 1e-7 * force_ratio)
-    h_stick     rebounds flying less high than h_stick * (|x| + d/2) also merge (default 1e-10)
+    method
+        'RK45', 'DOP853', 'Radau', 'LSODA' (also 'BDF', 'RK23')
+    rtol, atol
+        solve_ivp tolerances; atol defaults to rtol * force_ratio
+    max_impacts
+        cap on wall impacts (plus merges); exceeding it fails the run
+    v_stick
+        rebound speed below which the masses merge (default 1e-7 * force_ratio)
+    h_stick
+        rebounds flying less high than h_stick * (abs(x) + d/2) also merge (default 1e-10)
     """
     check_inputs(system, r, t_end, t_window, start)
     seg = Segments(system, r, t_end, t_window, method, rtol, atol)

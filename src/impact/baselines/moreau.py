@@ -66,9 +66,12 @@ def simulate_moreau_jean(system: System, r: float, t_end: float, t_window: float
                          dt: float, theta: float = 0.5, gamma: float = 0.5):
     """Moreau--Jean time stepping (see the module docstring).
 
-    dt      time step
-    theta   theta-method weight of the smooth forces, in [0, 1] (1/2: trapezoidal; >= 1/2 stable)
-    gamma   gap prediction weight for the index set (contact active if g + gamma dt g' <= 0)
+    dt
+        time step
+    theta
+        theta-method weight of the smooth forces, in [0, 1] (1/2: trapezoidal; >= 1/2 stable)
+    gamma
+        gap prediction weight for the index set (contact active if g + gamma dt g' <= 0)
     """
     check_inputs(system, r, t_end, t_window, start)
     dt = float(dt)

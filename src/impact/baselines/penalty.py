@@ -49,12 +49,17 @@ def simulate_penalty(system: System, r: float, t_end: float, t_window: float, st
                      max_impacts: int = 10 ** 6, v_stick: float | None = None):
     """Compliant-contact baseline (see the module docstring).
 
-    stiffness   contact spring k (force per unit penetration, model units M = 1, omega = 1)
-    method      solve_ivp method ('Radau' default; 'LSODA', 'BDF', explicit ones work but are slow)
-    rtol, atol  solve_ivp tolerances; atol defaults to rtol * force_ratio
-    max_impacts cap on contact entries; exceeding it fails the run
-    v_stick     entries slower than this (default 1e-7 * force_ratio; e.g. a mass pushed into
-                the wall by friction from rest) are contact episodes, not impacts
+    stiffness
+        contact spring k (force per unit penetration, model units M = 1, omega = 1)
+    method
+        solve_ivp method ('Radau' default; 'LSODA', 'BDF', explicit ones work but are slow)
+    rtol, atol
+        solve_ivp tolerances; atol defaults to rtol * force_ratio
+    max_impacts
+        cap on contact entries; exceeding it fails the run
+    v_stick
+        entries slower than this (default 1e-7 * force_ratio; e.g. a mass pushed into the wall by friction from
+        rest) are contact episodes, not impacts
     """
     common.check_inputs(system, r, t_end, t_window, start)
     k = float(stiffness)

@@ -42,7 +42,7 @@ from impact.model.params import ParameterError
 N_GRID = 4000  # samples per half period for the extremum searches (masri.md 4.3)
 BRANCHES = ("upper", "lower")
 _SIGNS = {"upper": +1.0, "lower": -1.0}
-_ROOT_KEYS = ("tau", "force_phase", "sin_tau", "cos_tau", "amplitude", "amplitude_ratio", "u",
+_ROOT_KEYS = ("tau", "force_phase", "sin_tau", "cos_tau", "amplitude", "amplitude_over_static", "u",
               "x0", "v_minus", "v_plus", "B1", "B2", "no_extra_impact_margin")
 
 
@@ -297,7 +297,7 @@ def _analyse_root(c, ex, sign) -> dict:
     root = _root_from_phase(c, *_root_phase(c, ex, sign))
     root.update(_admissibility(c, root))
     root["amplitude"] = _amplitude(c, root)
-    root["amplitude_ratio"] = root["amplitude"] / c["force_ratio"]
+    root["amplitude_over_static"] = root["amplitude"] / c["force_ratio"]
     root.update(_stability(c, root, root["admissible"]))
     root["exists"] = True
     return root
@@ -310,7 +310,7 @@ def masri_2eipc(mu, e, beta, r, gap, force_ratio=0.096) -> dict:
     ``upper``/``lower`` dicts (upper/lower signs of eq. 6).  Each root dict has
     exists, admissible, approach_ok, departure_ok, no_extra_impact_margin,
     reason ('' if admissible), stable, tau, force_phase, sin_tau, cos_tau,
-    amplitude, amplitude_ratio, u, x0, v_minus, v_plus, B1, B2, eigenvalues
+    amplitude, amplitude_over_static, u, x0, v_minus, v_plus, B1, B2, eigenvalues
     (sorted by decreasing modulus), eigenvalue_moduli, max_modulus and
     jacobian (4x4, coordinates (t, x, xdot, ydot) after a +d/2 impact).
     Gaps, amplitudes and velocities are in model units (omega = 1).

@@ -25,4 +25,10 @@ By concern:
 - :mod:`.run`          the one entry point, :func:`.run.simulate`: its table LOOPS picks the loop a scene needs
 
 See ``docs/architecture.md`` for where the engine sits and ``docs/model.md`` for what it solves.
+
+The public names (:func:`simulate`, :func:`sweep`, the result types, :func:`spectral_acceleration`) load on first use (``__init__.pyi`` lists them): importing one module of the engine does not import the rest.
 """
+
+import lazy_loader
+
+__getattr__, __dir__, __all__ = lazy_loader.attach_stub(__name__, __file__)

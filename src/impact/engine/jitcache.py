@@ -13,11 +13,13 @@ catches that and drops the cached kernels of that folder once.
 from __future__ import annotations
 
 import contextlib
-import fcntl
 import functools
 import hashlib
 import os
+import sys
 from pathlib import Path
+
+import filelock
 
 CORE = Path(__file__).parent
 # the stamp of the engine's cache folder: both loops cache there, so they share one stamp (with one each, the
@@ -35,20 +37,21 @@ def sources_digest() -> str:
 
 def purge_stale_cache(dispatcher, name: str) -> None:
     """Drop the cached kernels beside `dispatcher`'s cache when the core's sources changed."""
+    if not hasattr(dispatcher, "_cache"):
+        return  # NUMBA_DISABLE_JIT: plain Python functions, nothing cached
     folder = Path(dispatcher._cache._cache_path)
     stamp = folder / f"{name}-{sources_digest()}.stamp"
     try:
         if stamp.exists():
             return
         folder.mkdir(parents=True, exist_ok=True)
-        with open(folder / f"{name}.lock", "w") as lock:
-            fcntl.flock(lock, fcntl.LOCK_EX)
+        with filelock.FileLock(folder / f"{name}.lock"):
             if not stamp.exists():
                 for old in folder.iterdir():
-                    if old.suffix in (".nbi", ".nbc") or (old.suffix == ".stamp" and old.name.startswith(name)):
+                    stale_stamp = old.suffix == ".stamp" and old.name.startswith((name, "compiled-"))
+                    if old.suffix in (".nbi", ".nbc") or stale_stamp:
                         old.unlink(missing_ok=True)
                 stamp.touch()
-            fcntl.flock(lock, fcntl.LOCK_UN)
     except OSError:
         pass  # a read-only cache: numba compiles in memory instead
 
@@ -58,18 +61,27 @@ def _cache_dir() -> Path:
 
 
 @contextlib.contextmanager
-def compile_lock():
+def compile_lock(what: str | None = None, label: str = ""):
     """Exclusive lock on the numba cache folder while kernels compile or load.
 
     Processes starting together (parallel Snakemake or SLURM jobs) never write
     the on-disk cache at the same time: the first compiles and stores, the
-    others wait and then load.
+    others wait and then load.  (filelock: a well-kept lock that also works
+    where fcntl does not.)
+
+    what: a short name of the kernels the block compiles or loads (safe in a
+    file name), label: what a person reads.  The first time they compile for
+    these sources, one line on stderr says so, since it takes a minute or two
+    and happens once: later processes load them from the cache.
     """
     folder = _cache_dir()
     folder.mkdir(parents=True, exist_ok=True)
-    with open(folder / "impact-jit.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(lock, fcntl.LOCK_UN)
+    stamp = folder / f"compiled-{what}-{sources_digest()}.stamp" if what else None
+    with filelock.FileLock(folder / "impact-jit.lock"):
+        if stamp is not None and not stamp.exists():
+            print(f"impact: compiling {label or what} (once: later runs load it from {folder}; this takes a minute "
+                  "or two)", file=sys.stderr, flush=True)
+        yield
+        if stamp is not None:
+            with contextlib.suppress(OSError):  # a read-only cache: numba compiled in memory
+                stamp.touch()

@@ -237,7 +237,7 @@ def simulate_scene(scene: Scene, *, record: int = 0, times=None) -> SceneResult:
     arrays = _scene_arrays(scene)
     key = _signature_key(arrays)
     if key not in _WARM:
-        with compile_lock():
+        with compile_lock(_kernel_name(key), _kernel_label(key)):
             out = run_arrays(arrays, record, times)
         _WARM.add(key)
     else:
@@ -248,8 +248,22 @@ def simulate_scene(scene: Scene, *, record: int = 0, times=None) -> SceneResult:
 _WARM: set = set()
 
 
+#: the optional parts of a scene, each compiled into its own specialisation of the loop when present
+OPTIONAL_PARTS = {"springs": "pendulums or TMDs", "fric": "friction", "harm": "a harmonic load",
+                  "record": "a load record"}
+
+
 def _signature_key(arrays: dict) -> tuple:
-    return tuple(arrays[k] is None for k in ("springs", "fric", "harm", "record"))
+    return tuple(arrays[k] is None for k in OPTIONAL_PARTS)
+
+
+def _kernel_name(key: tuple) -> str:
+    return "scene-" + "".join("0" if absent else "1" for absent in key)
+
+
+def _kernel_label(key: tuple) -> str:
+    parts = [text for text, absent in zip(OPTIONAL_PARTS.values(), key) if not absent]
+    return "the engine's scene loop" + (f" for scenes with {', '.join(parts)}" if parts else "")
 
 
 def _result(scene: Scene, arrays: dict, out: dict) -> SceneResult:

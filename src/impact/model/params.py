@@ -20,7 +20,7 @@ import numpy as np
 
 IMPACT_KINDS = ("cid", "pid")  # the dampers with walls: the paper's two
 STARTS = ("centre", "left", "right")
-G_GRAV = 9.80665  # m/s^2, standard gravity; only friction needs a physical scale
+G_GRAV = 9.80665  # m/s^2, standard gravity
 
 
 class ParameterError(ValueError):
@@ -146,11 +146,14 @@ class System:
 class Protocol:
     """The paper's response protocol (model.md, "Response protocol").
 
-    periods         natural periods simulated (2*pi each)
-    average_from    the amplitude window starts after this many periods
-    start           damper mass's initial place: 'centre', 'left' or 'right' wall
-    max_events_per_period   guard against impact accumulations: exceeding it
-                    ends the run with a flag instead of looping
+    periods
+        natural periods simulated (2*pi each)
+    average_from
+        the amplitude window starts after this many periods
+    start
+        damper mass's initial place: 'centre', 'left' or 'right' wall
+    max_events_per_period
+        guard against impact accumulations: exceeding it ends the run with a flag instead of looping
     """
 
     periods: float = 500.0

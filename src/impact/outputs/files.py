@@ -23,7 +23,8 @@ from impact.outputs.provenance import attributes
 if TYPE_CHECKING:  # xarray only for the annotations: a job that writes no dataset does not import it
     import xarray as xr
 
-CONVENTIONS = "CF-1.10"
+#: the CF version every dataset declares, the one the tests check them against (compliance-checker cf:1.8)
+CONVENTIONS = "CF-1.8"
 
 
 def _umask() -> int:
@@ -85,11 +86,33 @@ def undescribed_variables(ds: xr.Dataset) -> list[str]:
     return missing
 
 
-def describe(ds: xr.Dataset) -> xr.Dataset:
-    """The dataset with CF conventions and the code's provenance in its global attributes."""
+def flag(long_name: str, unset: str, set_: str) -> dict:
+    """CF attributes of a 0/1 variable: what each value means, and no unit."""
+    return {"long_name": long_name, "flag_values": np.array([0, 1], dtype=np.int8),
+            "flag_meanings": f"{unset} {set_}"}
 
+
+def as_integers(ds: xr.Dataset, names) -> xr.Dataset:
+    """Counts and flags held as floats (a table's columns) as 32-bit integers, attributes kept; refuses a NaN."""
+    for name in names:
+        if name in ds:
+            values = ds[name].values
+            if not np.all(np.isfinite(values)) or np.any(values != np.round(values)):
+                raise ValueError(f"{name}: a count or flag must be a whole number everywhere")
+            ds[name] = ds[name].astype(np.int32, keep_attrs=True)
+    return ds
+
+
+def describe(ds: xr.Dataset, config: dict | None = None) -> xr.Dataset:
+    """The dataset with CF conventions, the code's provenance, a history line and (when given, unless the
+    dataset has its own) the configuration it was made from in its global attributes."""
     ds = ds.copy()
-    ds.attrs = {**ds.attrs, **{k: v for k, v in attributes().items() if k not in ds.attrs}}
+    prov = attributes()
+    ds.attrs = {**ds.attrs, **{k: v for k, v in prov.items() if k not in ds.attrs}}
+    if config is not None and "config" not in ds.attrs:
+        ds.attrs["config"] = json.dumps(config, sort_keys=True)
+    line = f"{prov['date_created']}: written by {prov['source']}, commit {prov['git_commit']}"
+    ds.attrs["history"] = "\n".join(filter(None, (ds.attrs.get("history"), line)))
     ds.attrs["Conventions"] = CONVENTIONS
     return ds
 
@@ -102,13 +125,15 @@ def _cf_types(ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
-def write_dataset(ds: xr.Dataset, path) -> Path:
-    """Write a self-describing, compressed netCDF atomically (see the module doc)."""
+def write_dataset(ds: xr.Dataset, path, config: dict | None = None) -> Path:
+    """Write a self-describing, compressed netCDF atomically (see the module doc).
+
+    config: what the job's results depend on (its params), kept as JSON in the global attribute `config`."""
     missing = undescribed_variables(ds)
     if missing:
         raise ValueError(f"{path}: variables {', '.join(missing)} lack long_name and units (or CF flag "
                          "attributes); every dataset the study writes must describe each of its variables")
-    ds = _cf_types(describe(ds))
+    ds = _cf_types(describe(ds, config))
     encoding = {name: {"zlib": True, "complevel": 4} for name in ds.data_vars if ds[name].dtype.kind in "fiu"}
     for name in ds.coords:
         # CF: a coordinate variable has no missing values, so no _FillValue

@@ -35,6 +35,11 @@ def logged(path):
 
 
 def log_versions() -> None:
-
     logging.info("python %s; %s", sys.version.split()[0], json.dumps(package_versions()))
     logging.info("provenance %s", json.dumps(attributes()))
+
+
+def job_config(smk) -> dict:
+    """What a job's results depend on, beside the library code: its rule's params (the `config` attribute
+    write_dataset keeps)."""
+    return {name: value for name, value in smk.params.items() if name != "library"}

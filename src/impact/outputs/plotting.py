@@ -434,22 +434,28 @@ def plot_loads_reduction(datasets: dict, outputs) -> None:
     plt.close(fig)
 
 
-def plot_loads_time_history(ds, outputs) -> None:
-    """The roof with and without the damper, and the damper's stroke between its walls, impacts marked."""
+def plot_time_history(ds, outputs) -> None:
+    """A run in time (outputs.datasets.time_history_dataset): the roof with (and without) the damper, and the
+    damper's stroke between its walls, impacts marked.  Metres are drawn in cm; model units as they are."""
     t = ds["t"].values
+    unit = ds["stroke"].attrs["units"]
+    scale, label = (100.0, "cm") if unit == "m" else (1.0, "model units")
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(11.0, 6.0), sharex=True, layout="constrained")
-    top.plot(t, ds["roof_bare"].values * 100, color="0.5", lw=0.8, label="bare")
-    top.plot(t, ds["roof_damped"].values * 100, color="C0", lw=0.8, label=f"with the {ds.attrs['damper'].upper()}")
-    top.set_ylabel("roof displacement (cm)")
+    if "roof_bare" in ds:
+        top.plot(t, ds["roof_bare"].values * scale, color="0.5", lw=0.8, label="bare")
+    top.plot(t, ds["roof_damped"].values * scale, color="C0", lw=0.8, label=f"with the {ds.attrs['damper'].upper()}")
+    top.set_ylabel(f"roof displacement ({label})")
     top.legend(fontsize=8)
-    half = float(ds["half_gap"]) * 100
-    bottom.plot(t, ds["stroke"].values * 100, color="C1", lw=0.8, label="damper mass relative to the roof")
-    for wall in (-half, half):
-        bottom.axhline(wall, color="k", lw=0.6, ls="--")
-    impacts = ds["impact_time"].values
-    bottom.plot(impacts, np.interp(impacts, t, ds["stroke"].values * 100), "k|", ms=8, label="impacts")
-    bottom.set_ylabel("stroke (cm)")
-    bottom.set_xlabel("time (s)")
+    half = float(ds["half_gap"]) * scale
+    stroke = ds["stroke"].values * scale
+    bottom.plot(t, stroke, color="C1", lw=0.8, label="damper mass relative to its floor")
+    if np.isfinite(half):  # a TMD has no walls and no impacts
+        for wall in (-half, half):
+            bottom.axhline(wall, color="k", lw=0.6, ls="--")
+        impacts = ds["impact_time"].values
+        bottom.plot(impacts, np.interp(impacts, t, stroke), "k|", ms=8, label=f"impacts ({len(impacts)})")
+    bottom.set_ylabel(f"stroke ({label})")
+    bottom.set_xlabel("time (s)" if unit == "m" else "time (model units: radians of the structure)")
     bottom.legend(fontsize=8)
     fig.suptitle(ds.attrs["title"], fontsize=9)
     for out in outputs:

@@ -53,7 +53,7 @@ def stage_buildings(loads: dict) -> list[str]:
     return list(buildings(loads))
 
 
-#: measure -> (long name, units); the first four are linear in the level for a linear building and damper
+#: measure -> (long name, units); the first four (SCALED) are linear in the level for a linear building and damper
 MEASURES = {
     "drift_ratio": ("peak inter-storey drift ratio (drift over the storey height)", "1"),
     "peak_roof": ("peak roof displacement relative to the ground", "m"),
@@ -61,6 +61,8 @@ MEASURES = {
     "stroke": ("largest stroke of the damper mass relative to the roof", "m"),
     "impacts": ("number of impacts", "1"),
     "energy_residual": ("energy balance residual of the run, relative", "1"),
-    "event_cap_reached": ("the run stopped at the engine's event cap (0 or 1)", "1"),
+    "event_cap_reached": ("the run stopped at the engine's event cap", None),
 }
 SCALED = ("drift_ratio", "peak_roof", "peak_accel", "stroke")
+#: the measures that are counts or flags (stored as integers); a flag (units None) has meanings instead
+WHOLE = ("impacts", "event_cap_reached")

@@ -15,7 +15,9 @@ from impact.model.params import G_GRAV
 from impact.model.records import Record
 from impact.model.scene import GroundMotion, Scene
 from impact.model.suites import load_suite_record
-from impact.stages.ida.plan import LINEAR, MEASURES, SCALED, ladder, motions
+from impact.outputs.files import as_integers, flag
+from impact.outputs.labels import EVENT_CAP_MEANINGS
+from impact.stages.ida.plan import LINEAR, MEASURES, SCALED, WHOLE, ladder, motions
 from impact.stages.loads.plan import impact_damper, make_building, tmd_damper
 
 INITIAL_CONDITION = "building and damper at rest; an impact damper's mass centred between its walls"
@@ -54,9 +56,13 @@ def _suite(cfg: dict) -> dict[str, Record]:
 def _described(ds: xr.Dataset, cfg: dict, building_name: str, building: Building, kind: str) -> xr.Dataset:
     for name, (text, units) in MEASURES.items():
         if name in ds:
-            ds[name].attrs = {"long_name": text, "units": units}
-    ds["level"].attrs = {"long_name": "spectral acceleration Sa(T1, 5 %) the ground motion is scaled to",
-                         "units": "1", "comment": "in units of standard gravity g = 9.80665 m s-2"}
+            ds[name].attrs = flag(text, *EVENT_CAP_MEANINGS) if units is None else {"long_name": text, "units": units}
+    ds = as_integers(ds, WHOLE)
+    ds["level"].attrs = {"long_name": "spectral acceleration Sa(T1, 5 %) the ground motion is scaled to, over "
+                                      "standard gravity (Sa in g)", "units": "1"}
+    ds = ds.assign_coords(sa=("level", ds["level"].values * G_GRAV,
+                              {"long_name": "spectral acceleration Sa(T1, 5 %) the ground motion is scaled to",
+                               "units": "m s-2"}))
     ds["motion"].attrs = {"long_name": "FEMA P695 ground motion (suite:record:component)"}
     ds.attrs.update(title=f"Incremental dynamic analysis: building {building_name}, {kind}", building=building_name,
                     damper=kind, storeys=building.storeys, period1_s=building.period1, zeta=building.zeta,
@@ -75,8 +81,8 @@ def bare_runs(cfg: dict, loads: dict, building_name: str) -> xr.Dataset:
                for key in records]
     ds = _stack(columns, list(records), levels)
     ds["sa_record"] = ("motion", np.array([sa[k] for k in records]),
-                       {"long_name": "Sa(T1, 5 %) of the ground motion as recorded", "units": "1",
-                        "comment": "in units of standard gravity g = 9.80665 m s-2"})
+                       {"long_name": "Sa(T1, 5 %) of the ground motion as recorded, over standard gravity (Sa in g)",
+                        "units": "1"})
     ds = ds.assign_coords(group=("motion", [rec.metadata["group"] for rec in records.values()],
                                  {"long_name": "record group (far-field, near-field pulse, near-field no pulse)"}))
     return _described(ds, cfg, building_name, building, "bare")

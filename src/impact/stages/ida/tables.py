@@ -37,10 +37,16 @@ def collect(bare: dict, dampers: dict) -> xr.Dataset:
         sa_record=plain["sa_record"]).assign_coords(building=names, damper=kinds)
     ds["building"].attrs = {"long_name": "building: storeys and fundamental period"}
     ds["damper"].attrs = {"long_name": "damper type"}
-    ds.attrs = {"title": "Incremental dynamic analysis on the FEMA P695 suites: every building and damper",
-                "storey_height_m": bare[names[0]].attrs["storey_height_m"],
-                "zeta": bare[names[0]].attrs["zeta"],
-                "initial_condition": bare[names[0]].attrs["initial_condition"]}
+    first = bare[names[0]].attrs
+    configs = {piece.attrs.get("config") for piece in [*bare.values(), *dampers.values()]}
+    if len(configs) > 1:
+        raise ValueError("ida: the runs were made with different configurations")
+    ds.attrs = {"title": f"Incremental dynamic analysis on the FEMA P695 suites: {len(names)} buildings, bare and "
+                         f"with {len(kinds)} dampers, {ds.sizes['motion']} ground motions, {ds.sizes['level']} levels",
+                "buildings": ", ".join(names), "dampers": ", ".join(kinds),
+                "storey_height_m": first["storey_height_m"], "zeta": first["zeta"],
+                "initial_condition": first["initial_condition"],
+                **({"config": configs.pop()} if None not in configs else {})}
     return ds
 
 

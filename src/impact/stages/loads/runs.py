@@ -12,6 +12,7 @@ from impact.engine.scenes import simulate_scene
 from impact.model.building import Building
 from impact.model.scene import Damper, GroundMotion, Scene
 from impact.model.suites import record_by_key
+from impact.outputs.datasets import time_history_dataset
 from impact.stages.loads.plan import (
     IMPACT_RECORDS,
     RESPONSES,
@@ -138,21 +139,11 @@ def time_history(cfg: dict, building_name: str, record: str, kind: str, mass_rat
     plain = simulate_scene(Scene(building, (), load.load), times=times)
     damped = simulate_scene(Scene(building, (damper,), load.load), times=times, record=IMPACT_RECORDS)
     q = damped.samples["q"]
-    data = {
-        "roof_bare": ("t", plain.samples["q"][:, roof], {"long_name": "roof displacement, bare building",
-                                                            "units": "m"}),
-        "roof_damped": ("t", q[:, roof], {"long_name": f"roof displacement with the {kind.upper()}", "units": "m"}),
-        "stroke": ("t", q[:, building.storeys] - q[:, roof],
-                   {"long_name": "damper mass relative to the roof", "units": "m"}),
-        "impact_time": ("impact", damped.records["t"], {"long_name": "time of each impact", "units": "s"}),
-        "impact_impulse": ("impact", np.abs(damped.records["impulse"]),
-                           {"long_name": "momentum exchanged in the impact", "units": "N s"}),
-        "half_gap": ((), 0.5 * damper.gap, {"long_name": "half the clearance: where the walls are", "units": "m"}),
-    }
-    # "t", not "time": CF reserves a coordinate named time for dates ("seconds since ...")
-    ds = xr.Dataset(data, coords={"t": ("t", times, {"long_name": "time since the record's start", "units": "s"})})
-    ds.attrs.update(title=f"Loads study: one case in time ({building_name}, {record} at {pga:g} g, "
-                          f"{kind.upper()} of {mass_ratio:g} of the mass, g = {gap_ratio:g})",
-                    building=building_name, record=record, pga_g=pga, damper=kind, mass_ratio=mass_ratio,
-                    gap_ratio=gap_ratio, initial_condition="building and damper at rest; damper mass centred")
+    title = (f"Loads study: one case in time ({building_name}, {record} at {pga:g} g, "
+             f"{kind.upper()} of {mass_ratio:g} of the mass, clearance {gap_ratio:g} x the bare peak roof displacement)")
+    ds = time_history_dataset(times, q[:, roof], q[:, building.storeys] - q[:, roof], 0.5 * damper.gap,
+                              damped.records["t"], damped.records["impulse"], length_unit="m", impulse_unit="N s",
+                              title=title, kind=kind, roof_bare=plain.samples["q"][:, roof],
+                              building=building_name, record=record, pga_g=pga, mass_ratio=mass_ratio,
+                              gap_ratio=gap_ratio, initial_condition="building and damper at rest; damper mass centred")
     return ds

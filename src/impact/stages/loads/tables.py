@@ -10,7 +10,10 @@ import pandas as pd
 import xarray as xr
 
 from impact.model.building import Building
+from impact.model.params import G_GRAV
 from impact.model.scene import DAMPER_KINDS
+from impact.outputs.files import as_integers, flag
+from impact.outputs.labels import EVENT_CAP_MEANINGS
 from impact.stages.loads.plan import (
     RESPONSES,
     SAME,
@@ -27,8 +30,10 @@ MEASURES = {
     "impulse_mean": ("mean momentum exchanged per impact", "N s"),
     "impulse_max": ("largest momentum exchanged in one impact", "N s"),
     "energy_residual": ("energy balance residual of the run, relative", "1"),
-    "event_cap_reached": ("the run stopped at the event cap (0 or 1)", "1"),
+    "event_cap_reached": ("the run stopped at the event cap", None),
 }
+#: the measures that are counts or flags (stored as integers); a flag's units are its meanings
+WHOLE = ("impacts", "event_cap_reached")
 
 
 LABEL_DIMS = {"records": ("record", "intensity"), "kanai_tajimi": ("soil", "seed", "intensity"),
@@ -37,7 +42,10 @@ LABEL_DIMS = {"records": ("record", "intensity"), "kanai_tajimi": ("soil", "seed
 
 COORD_ATTRS = {
     "record": {"long_name": "ground-motion record"},
-    "intensity": {"long_name": "peak ground acceleration the load is scaled to", "units": "g"},
+    # the index stays in g, as the configuration gives it; pga beside it is the same in SI units
+    "intensity": {"long_name": "peak ground acceleration the load is scaled to, over standard gravity (PGA in g)",
+                  "units": "1"},
+    "pga": {"long_name": "peak ground acceleration the load is scaled to", "units": "m s-2"},
     "soil": {"long_name": "Kanai-Tajimi soil"},
     "seed": {"long_name": "seed of the Kanai-Tajimi realisation", "units": "1"},
     "wind_seed": {"long_name": "seed of the narrow-band wind force", "units": "1"},
@@ -73,11 +81,16 @@ def rows_dataset(rows: list[dict], lead: tuple) -> xr.Dataset:
     ds = xr.merge(parts, join="outer")
     for name in ds.data_vars:
         family = next(f for f in LABEL_DIMS if name.startswith(f + "_"))
-        text, units = MEASURES[name.removeprefix(family + "_")]
-        ds[name].attrs = {"long_name": f"{text}, {family.replace('_', '-')} loads", "units": units}
+        measure = name.removeprefix(family + "_")
+        text, units = MEASURES[measure]
+        long_name = f"{text}, {family.replace('_', '-')} loads"
+        ds[name].attrs = (flag(long_name, *EVENT_CAP_MEANINGS) if units is None
+                          else {"long_name": long_name, "units": units})
+    if "intensity" in ds.coords:
+        ds = ds.assign_coords(pga=("intensity", ds["intensity"].values * G_GRAV))
     for name in ds.coords:
         ds[name].attrs = COORD_ATTRS[name]
-    return ds
+    return as_integers(ds, [f"{family}_{m}" for family in LABEL_DIMS for m in WHOLE])
 
 
 def _described(ds: xr.Dataset, building_name: str, building: Building, damper: str) -> xr.Dataset:
@@ -116,8 +129,29 @@ def collect(bare: dict, dampers: dict) -> dict:
                 ds[name].attrs["long_name"] = "bare building: " + ds[name].attrs["long_name"]
         ds["building"].attrs = COORD_ATTRS["building"]
         ds["damper"].attrs = COORD_ATTRS["damper"]
+        ds.attrs = _collected_attrs(family, bare, names, ds)
         out[family] = ds
     return out
+
+
+#: what each family's collected dataset holds, for its title
+FAMILY_TITLES = {"records": "the real earthquake records scaled to each PGA",
+                 "kanai_tajimi": "seeded Kanai-Tajimi ground motions per soil, scaled to each PGA",
+                 "wind": "seeded narrow-band wind forces on every floor"}
+
+
+def _collected_attrs(family: str, bare: dict, names: list, ds: xr.Dataset) -> dict:
+    """Global attributes of a family's dataset over every building and damper: what it holds, not the first
+    piece's values, and the configuration its pieces were run with."""
+    first = bare[names[0]].attrs
+    configs = {bare[name].attrs.get("config") for name in names}
+    if len(configs) > 1:
+        raise ValueError(f"loads, {family}: the buildings' runs were made with different configurations")
+    return {"title": f"Loads study: {len(names)} buildings x {ds.sizes['damper']} dampers under "
+                     f"{FAMILY_TITLES[family]}",
+            "buildings": ", ".join(names), "dampers": ", ".join(map(str, ds["damper"].values)),
+            "zeta": first["zeta"], "initial_condition": first["initial_condition"],
+            **({"config": configs.pop()} if None not in configs else {})}
 
 
 def _family(ds: xr.Dataset, family: str) -> xr.Dataset:

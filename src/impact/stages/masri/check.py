@@ -160,7 +160,7 @@ def check_point(mu, e, beta, r, g, force_ratio, starts, protocol) -> list[dict]:
         row = {"mu": mu, "e": e, "r": r, "gap_ratio": g, "root": name, "exists": bool(root["exists"]),
                "admissible": bool(root["admissible"]), "stable": bool(root["stable"]),
                "max_modulus": float(root["max_modulus"]) if root["exists"] else math.nan,
-               "amplitude_ratio_cf": float(root["amplitude_ratio"]) if root["exists"] else math.nan}
+               "amplitude_over_static_cf": float(root["amplitude_over_static"]) if root["exists"] else math.nan}
         if root["admissible"] and root["stable"]:
             row.update(check_stable(mu, e, beta, r, gap, force_ratio, root))
             amp_stable = row["amplitude_rms_closed_form"]
@@ -196,7 +196,7 @@ def to_dataset(table: pd.DataFrame, attrs: dict) -> xr.Dataset:
         "admissible": ("1", "the root is a physical 2-EIPC motion (approach, no extra impact)"),
         "stable": ("1", "admissible and all impact-map eigenvalues inside the unit circle"),
         "max_modulus": ("1", "largest eigenvalue modulus of the impact-to-impact map"),
-        "amplitude_ratio_cf": ("1", "closed-form main-mass amplitude over F0/K"),
+        "amplitude_over_static_cf": ("1", "closed-form main-mass amplitude over F0/K"),
     }
     for name, (units, long_name) in meta.items():
         ds[name].attrs.update(units=units, long_name=long_name)

@@ -27,7 +27,7 @@ SCHEMA_PATH = Path(__file__).with_name("rig.schema.yaml")
 def _validator():
 
     schema = yaml.safe_load(SCHEMA_PATH.read_text())
-    base = jsonschema.Draft7Validator
+    base = jsonschema.Draft202012Validator
     check_properties = base.VALIDATORS["properties"]
 
     def fill_defaults(validator, properties, instance, subschema):

@@ -744,8 +744,7 @@ def warm_up() -> None:
     global _WARM
     if _WARM:
         return
-
-    with compile_lock():
+    with compile_lock("rig", "the virtual test rig's kernels"):
         spec = rig_spec(mu=0.0129, gap_mm=30.0, rp=1.0, wall="steel")
         run(spec, 1.0, 0.05, np.array([0.0, 0.01]), state=[0.0, 0.0, 0.3, 0.0], max_episodes=1)
         _drop_contact(0.1, 1.0, 1e9, 1.5, 0.5, 1e-3, 1.0, 9.8, 0.0)
