@@ -1,7 +1,7 @@
 # Two commands for a fresh machine (README):
 #   make study   installs everything, then runs the full study (snakemake --cores 2)
 #   make test    installs everything, then runs the test suite
-# Everything is installed into .venv from pyproject.toml; nothing by hand.
+# Everything is installed into .venv from pyproject.toml, at the versions constraints.txt pins; nothing by hand.
 
 PYTHON ?= python3
 VENV   := .venv
@@ -9,12 +9,12 @@ BIN    := $(VENV)/bin
 CORES  ?= 2
 STAMP  := $(VENV)/.installed
 
-.PHONY: setup study paper test smoke lint docs bench clean chromium
+.PHONY: setup study paper test smoke lint docs screenshots bench clean chromium
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet -e '.[workflow,test,docs]'
+	$(BIN)/pip install --quiet -c constraints.txt -e '.[workflow,test,docs]'
 	@echo "compiling the engine's kernels into numba's cache, once (about 6 minutes on 2 cores)"
 	$(BIN)/impact compile > /dev/null
 	touch $(STAMP)
@@ -45,6 +45,10 @@ lint: $(STAMP)
 docs: $(STAMP)
 	$(BIN)/sphinx-build -W --keep-going -q -b html docs docs/_build/html
 	@echo "docs/_build/html/index.html"
+
+# both reports of a finished study as a reader sees them, 1280 px wide (headless Chromium): results/screenshots/
+screenshots: $(STAMP) chromium
+	$(BIN)/python tools/screenshots.py --results results
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_core.py

@@ -27,3 +27,8 @@ def test_two_processes_compiling_at_once_agree(tmp_path):
     assert files
     third = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=600)
     assert third.returncode == 0 and json.loads(third.stdout) == results[0]
+    # a compile says so, once, on stderr: the process that compiled, not the one that waited and loaded, nor
+    # a later one
+    said = [err.count("impact: compiling the engine's paper loop for the PID") for _, err in outs]
+    assert sorted(said) == [0, 1], [err for _, err in outs]
+    assert "compiling" not in third.stderr

@@ -13,6 +13,7 @@ import json
 import re
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -154,6 +155,11 @@ def test_every_rule_runs_the_script_named_after_it_and_tracks_that_scripts_libra
     assert "LIB_" not in (RULES / "common.smk").read_text()
 
 
+#: the package's data files, as pyproject.toml declares them (read at run time beside their modules)
+PACKAGE_DATA = {path for pattern in tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"][
+    "package-data"]["impact"] for path in PACKAGE.glob(pattern)}
+
+
 def test_a_scripts_library_is_its_transitive_impact_imports():
     """Against an independent reading: a breadth-first walk over this file's own import parser."""
     for script in sorted(SCRIPTS.glob("*.py")):
@@ -168,8 +174,7 @@ def test_a_scripts_library_is_its_transitive_impact_imports():
                     if found is not None and found not in expected:
                         expected.add(found)
                         todo.append(found)
-        data = {p for p in (PACKAGE / "stages" / "validation").glob("*.yaml")
-                if any(e.parent == p.parent for e in expected)}
+        data = {p for p in PACKAGE_DATA if any(e.parent == p.parent for e in expected)}
         assert set(code_deps.library_files(script, SRC)) == expected | data, script.name
 
 

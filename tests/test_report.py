@@ -203,7 +203,7 @@ def test_report_shows_every_given_section_from_the_files(results):
     assert "Figure fig99 of the study" in page and "figures: fig99</span>" in page
     assert "Against the paper: 1 of 2 of this figure&#39;s reported values agree" in page
     # closed-form check: rendered with a summary line computed from the table
-    assert "3 rows; agrees: 2 of 3 true" in page
+    assert "3 rows; agrees: 2 of 3 yes" in page
     # the overview is the workflow's description, with this run's protocol from the configuration
     assert "<h1>Impact dampers for civil structures: a reproducible study</h1>" in page
     assert "40 natural periods per run, amplitude from period\n20 on" in page
@@ -398,4 +398,40 @@ def test_long_tables_fold(tmp_path, results):
     page, shown = report.render_report(sections, None, TEMPLATE)
     assert shown == ["long"]
     assert f"<details><summary>All {report.LONG_TABLE + 1} rows</summary>" in page
-    assert f"{report.LONG_TABLE + 1} rows; ok: 40 of 61 true" in page
+    assert f"{report.LONG_TABLE + 1} rows; ok: 40 of 61 yes" in page
+
+
+# --------------------------------------------------------------------------- words for identifiers
+
+
+@pytest.mark.parametrize("identifier, words", [
+    ("cid_mu0.01_e0.25", "CID, μ = 0.01, e = 0.25"),
+    ("pid_mu0.03_e0.45_rp1.5", "PID, μ = 0.03, e = 0.45, r' = 1.5"),
+    ("cid_mu0.01_e0.25_nu0.2_f1.5_L0.01", "CID, μ = 0.01, e = 0.25, ν = 0.2 (1.5 Hz, 1 cm)"),
+    ("s3_T0.5", "3 storeys, T1 = 0.5 s"), ("s1_T2", "1 storey, T1 = 2 s"),
+    ("mu0.0252_d20_rp1_steel", "μ = 0.0252, d = 20 mm, r' = 1, steel wall"),
+    ("pid_rp1_centre", "PID r' = 1, centre start"), ("cid_left", "CID, left start"),
+    ("ivp_RK45", "solve_ivp RK45"), ("moreau_jean", "Moreau–Jean time stepping"), ("tmd", "TMD"),
+    ("cid_2eipc", "CID on its 2-EIPC orbit (g = 1.6, left start)"), ("a plain phrase", "a plain phrase"),
+])
+def test_identifiers_are_shown_as_words(identifier, words):
+    from impact.outputs.labels import label
+
+    assert label(identifier) == words
+
+
+def test_a_table_shows_words_numbers_and_dashes_keeping_the_files_text(tmp_path):
+    """Columns by their labels, identifiers as words, booleans as yes/no, NaN as a dash; the file's own text stays
+    in the cell's tooltip, so nothing is lost."""
+    path = tmp_path / "t.csv"
+    path.write_text("curve,within_10pct,rel_difference,reason\ncid_mu0.01_e0.25,False,nan,grid edge\n")
+    view = report._table_view(path)
+    assert [c["label"] for c in view["columns"]] == ["curve", "within 10 %", "relative difference", "reason"]
+    shown = [c["shown"] for c in view["rows"][0]["cells"]]
+    assert shown == ["CID, μ = 0.01, e = 0.25", "no", "–", "grid edge"]
+    assert view["rows"][0]["cells"][0]["text"] == "cid_mu0.01_e0.25"
+
+
+def test_a_nested_summary_reads_as_words():
+    keys = [report._key_text(k) for k, _ in report._flatten({"limits": {"centre": {"by_eigenvalue": {"max|lambda| in [0.0, 0.95)": {"landed": 3}}}}})]
+    assert keys == ["limits › centre › by eigenvalue › max|λ| in [0.0, 0.95) › landed"]

@@ -42,7 +42,7 @@ SMOKE = "config/smoke.yaml"
 # the node advertises 4 CPUs (on a 2-CPU machine) so that single-thread jobs run side by side
 NODE_CPUS = "4"
 # dataset attributes that name the moment of the run rather than its content
-RUN_SPECIFIC_ATTRS = {"date_created"}
+RUN_SPECIFIC_ATTRS = {"date_created", "history"}
 RUN_TIMEOUT = 1800
 
 

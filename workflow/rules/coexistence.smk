@@ -58,7 +58,7 @@ rule coexistence_figure:
             "results/figures/coexistence_{curve}.png",
             caption="../report/coexistence_figure.rst",
             category=SECTIONS["coexistence"],
-            subcategory="Coexisting states of {curve}",
+            subcategory=lambda wildcards: f"Coexisting states of the {label(wildcards.curve)}",
         ),
         pdf="results/figures/coexistence_{curve}.pdf",
     log:
@@ -89,7 +89,7 @@ rule hysteresis_figure:
             "results/figures/hysteresis_{curve}.png",
             caption="../report/hysteresis_figure.rst",
             category=SECTIONS["coexistence"],
-            subcategory="Hysteresis of {curve}",
+            subcategory=lambda wildcards: f"Hysteresis of the {label(wildcards.curve)}",
         ),
         pdf="results/figures/hysteresis_{curve}.pdf",
     log:

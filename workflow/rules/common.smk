@@ -8,6 +8,7 @@ from snakemake.utils import validate
 from impact.stages import tables as comparison
 from impact.outputs.archive import archive_name
 from impact.outputs.code_deps import library_digest
+from impact.outputs.labels import label
 from impact.stages.validation.grid import SCHEMA_PATH as RIG_SCHEMA
 from impact.stages.validation.grid import study_cases, validation_config
 from impact.stages.numerics.plan import stability_families, work_precision_pieces
@@ -27,22 +28,21 @@ FIGURES = list(config["figures"])
 CURVES = all_curves(config)
 
 ENV = "../envs/impact.yaml"
-# the workflow's description (the Snakefile's report:), beside every caption and the page template
-OVERVIEW = os.path.relpath(workflow.report_text.get_path_or_uri(secret_free=True))
+# the workflow's description (OVERVIEW, in the Snakefile), beside every caption and the page template
 REPORT_DIR = os.path.dirname(OVERVIEW)
 
 # The report's sections, in order: the category of every report() flag, so that
-# Snakemake's report (which sorts them by name) and the HTML page agree.
+# Snakemake's report (which sorts them by name: hence 01 to 10) and the HTML page agree.
 SECTIONS = {
-    "paper": "1. The paper's values beside ours",
-    "figures": "2. The paper's figures",
-    "validation": "3. Experiment (cross-validation)",
-    "masri": "4. Closed form (Masri, 2 EIPC)",
-    "coexistence": "5. Initial conditions and coexisting states",
-    "numerics": "6. Numerics",
-    "robustness": "7. Table 1 in numbers",
-    "design": "8. Design charts",
-    "loads": "9. Earthquakes and wind on real buildings",
+    "paper": "01. The paper's values beside ours",
+    "figures": "02. The paper's figures",
+    "validation": "03. Experiment (cross-validation)",
+    "masri": "04. Closed form (Masri, 2 EIPC)",
+    "coexistence": "05. Initial conditions and coexisting states",
+    "numerics": "06. Numerics",
+    "robustness": "07. Table 1 in numbers",
+    "design": "08. Design charts",
+    "loads": "09. Earthquakes and wind on real buildings",
     "ida": "10. Incremental dynamic analysis on the FEMA P695 suites",
 }
 

@@ -115,7 +115,7 @@ rule ida_figure:
             "results/figures/ida_{building}.png",
             caption="../report/ida_figure.rst",
             category=SECTIONS["ida"],
-            subcategory="Building {building}",
+            subcategory=lambda wildcards: f"Building: {label(wildcards.building)}",
         ),
         pdf="results/figures/ida_{building}.pdf",
     log:

@@ -92,14 +92,25 @@ def flag(long_name: str, unset: str, set_: str) -> dict:
             "flag_meanings": f"{unset} {set_}"}
 
 
-def as_integers(ds: xr.Dataset, names) -> xr.Dataset:
-    """Counts and flags held as floats (a table's columns) as 32-bit integers, attributes kept; refuses a NaN."""
+def as_integers(ds: xr.Dataset, names, missing: int | None = None) -> xr.Dataset:
+    """Counts and flags held as floats (a table's columns) as 32-bit integers, attributes kept.
+
+    missing: the value written for NaN (a run that failed has no count), declared as the variable's CF
+    _FillValue so that a reader gets NaN back; None refuses a NaN."""
     for name in names:
-        if name in ds:
-            values = ds[name].values
-            if not np.all(np.isfinite(values)) or np.any(values != np.round(values)):
-                raise ValueError(f"{name}: a count or flag must be a whole number everywhere")
-            ds[name] = ds[name].astype(np.int32, keep_attrs=True)
+        if name not in ds:
+            continue
+        values = np.asarray(ds[name].values, dtype=float)
+        absent = np.isnan(values)
+        if (absent.any() and missing is None) or np.any(values[~absent] != np.round(values[~absent])):
+            raise ValueError(f"{name}: a count or flag must be a whole number everywhere")
+        attrs = dict(ds[name].attrs)
+        if "flag_values" in attrs:  # CF: a flag's values have the variable's type
+            attrs["flag_values"] = np.asarray(attrs["flag_values"], dtype=np.int32)
+        if absent.any():
+            attrs["_FillValue"] = np.int32(missing)
+        ds[name] = (ds[name].dims, np.where(absent, missing if missing is not None else 0, values).astype(np.int32),
+                    attrs)
     return ds
 
 

@@ -8,6 +8,7 @@ import pandas as pd
 from scipy import stats
 
 from impact.model.suites import GROUPS
+from impact.outputs.labels import label
 from impact.outputs.plotting import DAMPER_COLORS, plt, save_atomic
 
 CASE_COLORS = {"bare": "k", **DAMPER_COLORS}
@@ -88,7 +89,7 @@ def plot_ida_building(ds, fits: pd.DataFrame, building: str, cfg: dict, outputs)
     axes[2, 0].set_ylabel("probability of exceedance")
     for ax in axes[1, len(kinds):].tolist() + axes[2, len(limits):].tolist():
         ax.set_axis_off()
-    fig.suptitle(f"Incremental dynamic analysis, building {building}: {len(ds['motion'])} FEMA P695 ground motions "
+    fig.suptitle(f"Incremental dynamic analysis, {label(building)}: {len(ds['motion'])} FEMA P695 ground motions "
                  f"(thin: one each; median and 16/84 % fractiles)", fontsize=10)
     for out in outputs:
         save_atomic(fig, out)

@@ -14,6 +14,7 @@ import numpy as np  # noqa: E402
 from impact.model.params import curve_id  # noqa: E402
 from impact.outputs.files import atomic_path  # noqa: E402
 from impact.outputs.labels import TOO_SLOW  # noqa: E402
+from impact.outputs.labels import label as label_of  # noqa: E402
 
 IPC_MARKERS = {0: ("o", "none", "<1 IPC"), 1: ("^", "none", "1 IPC"), 2: ("o", "full", "2 IPC"), 3: ("s", "none", ">2 IPC")}
 START_STYLE = {"centre": "-", "left": ":", "right": "--"}
@@ -60,7 +61,8 @@ def plot_figure(fig_cfg: dict, datasets: dict, tmd: dict | None, outputs) -> Non
     panels = fig_cfg["panels"]
     ncols = 2 if len(panels) > 1 else 1
     nrows = int(np.ceil(len(panels) / ncols))
-    fig, axes = plt.subplots(nrows, ncols, figsize=(6.2 * ncols, 4.4 * nrows), squeeze=False)
+    # each panel's legend sits below it, off the curves (the low X_m region is what a reader looks for)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(6.2 * ncols, 5.6 * nrows), squeeze=False, layout="constrained")
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for ax, panel in zip(axes.flat, panels):
         for k, spec in enumerate(panel["curves"]):
@@ -69,16 +71,16 @@ def plot_figure(fig_cfg: dict, datasets: dict, tmd: dict | None, outputs) -> Non
             ax.axhline(tmd["X_m"], color="k", ls="--", lw=1.0,
                        label=f"optimum TMD (f={tmd['f']:.3f}, βt={tmd['beta_t']:.3f})")
         _legend_for_markers(ax)
-        ax.set_title(panel.get("title", ""))
+        if len(panels) > 1:  # one panel: the figure's title is its title
+            ax.set_title(panel.get("title", ""))
         ax.set_xlabel("gap ratio g = d / A_max")
         ax.set_ylabel("amplitude ratio X_m")
         ax.set_ylim(0.0, 1.1)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=6.5, loc="best", ncol=2)
+        ax.legend(fontsize=6.5, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, frameon=False)
     for ax in list(axes.flat)[len(panels):]:
         ax.set_visible(False)
     fig.suptitle(fig_cfg.get("title", ""), fontsize=10)
-    fig.tight_layout()
     for out in outputs:
         save_atomic(fig, out)
     plt.close(fig)
@@ -141,30 +143,30 @@ def plot_branches(ds, outputs) -> None:
 
 
 MODE_STYLE = {"from_rest": "-", "continuation_up": "--", "continuation_down": "-."}
+START_COLORS = {"centre": "C0", "left": "C1", "right": "C2"}
+START_MARKERS = {"centre": "o", "left": "s", "right": "^"}
 
 
 def plot_coexistence(spec: dict, from_rest, continuation: dict, ensemble, outputs) -> None:
     """X_m against g: from rest, both continuation directions, and the ensemble's envelope."""
-    fig, ax = plt.subplots(figsize=(7.4, 4.8))
+    fig, ax = plt.subplots(figsize=(9.4, 4.8), layout="constrained")
     g = ensemble["gap_ratio"].values if ensemble is not None else from_rest["gap_ratio"].values
     if ensemble is not None:
         ax.fill_between(g, ensemble["X_m_min"].values, ensemble["X_m_max"].values, color="0.85",
                         label=f"ensemble envelope ({ensemble.sizes['member']} starts)")
         ax.plot(g, ensemble["X_m_median"].values, color="0.5", lw=1.0, label="ensemble median")
     datasets = {"from_rest": from_rest, **continuation}
-    colors = {"centre": "C0", "left": "C1", "right": "C2"}
     for mode, ds in datasets.items():
         for start in ds["start"].values:
             ax.plot(ds["gap_ratio"].values, ds["X_m"].sel(start=start).values, MODE_STYLE.get(mode, "-"),
-                    color=colors.get(str(start), "k"), lw=1.2, marker=".", ms=3,
+                    color=START_COLORS.get(str(start), "k"), lw=1.2, marker=".", ms=3,
                     label=f"{mode.replace('_', ' ')}, start {start}")
     ax.set_xlabel("gap ratio g = d / A_max")
     ax.set_ylabel("amplitude ratio X_m")
     ax.set_ylim(0.0, 1.1)
     ax.grid(alpha=0.3)
     ax.set_title(f"{curve_label(spec)}: sweep protocol and initial condition")
-    ax.legend(fontsize=6.5, ncol=2, loc="best")
-    fig.tight_layout()
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     for out in outputs:
         save_atomic(fig, out)
     plt.close(fig)
@@ -173,16 +175,16 @@ def plot_coexistence(spec: dict, from_rest, continuation: dict, ensemble, output
 def plot_hysteresis(spec: dict, continuation: dict, from_rest, branches, gap_ratio: float, xst_over_amax: float,
                     outputs) -> None:
     """Frequency response at one gap: up- and down-sweep branches and the closed-form 2-EIPC branch."""
-    fig, ax = plt.subplots(figsize=(7.4, 4.8))
+    fig, ax = plt.subplots(figsize=(9.4, 4.8), layout="constrained")
     for mode, ds in continuation.items():
         for start in ds["start"].values:
             amp = ds["amplitude_ratio"].sel(start=start, gap_ratio=gap_ratio).values
             ax.plot(ds["freq_ratio"].values, amp, MODE_STYLE.get(mode, "-"), marker=".", ms=4, lw=1.0,
-                    label=f"{mode.replace('_', ' ')}, start {start}")
+                    color=START_COLORS.get(str(start), "k"), label=f"{mode.replace('_', ' ')}, start {start}")
     for start in from_rest["start"].values:
         amp = from_rest["amplitude_ratio"].sel(start=start, gap_ratio=gap_ratio).values
-        ax.plot(from_rest["freq_ratio"].values, amp, "o", mfc="none", ms=4, color="0.4",
-                label=f"from rest, start {start}")
+        ax.plot(from_rest["freq_ratio"].values, amp, START_MARKERS.get(str(start), "o"), mfc="none", ms=5,
+                color=START_COLORS.get(str(start), "0.4"), label=f"from rest, start {start}")
     if branches is not None:
         for name in ("upper", "lower"):
             sub = branches[branches["root"] == name]
@@ -196,8 +198,7 @@ def plot_hysteresis(spec: dict, continuation: dict, from_rest, branches, gap_rat
     ax.set_ylabel("√2·RMS amplitude / A_max")
     ax.set_title(f"{curve_label(spec)}, g = {gap_ratio:g}: hysteresis of the frequency response")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=6.5, loc="best")
-    fig.tight_layout()
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     for out in outputs:
         save_atomic(fig, out)
     plt.close(fig)
@@ -219,13 +220,14 @@ def plot_work_precision(ds, footer: str, outputs, error: str = "amplitude_error"
             if not ok.any():
                 continue
             style = dict(ms=10, color="k") if integ == "core" else dict(ms=5)
-            label = "core (the reference, drawn at the floor)" if integ == "core" else str(integ)
+            label = "exact core (the reference, drawn at the floor)" if integ == "core" else label_of(integ)
             ax.loglog(t[ok], np.maximum(e[ok], floor), "-" + markers.get(integ, "o"), label=label, **style)
         horizon = float(ds["predictability_horizon"].sel(case=case))
-        title = str(case) + (f" (inside predictability horizon t < {horizon:.0f})" if np.isfinite(horizon) else "")
+        title = label_of(case) + (f"\n(inside its predictability horizon, t < {horizon:.0f})"
+                                  if np.isfinite(horizon) else "")
         ax.set_title(title, fontsize=9)
         ax.set_xlabel("wall time per run [s] (min of repeats)")
-        ax.set_ylabel(f"{error.replace('_', ' ')} vs exact core")
+        ax.set_ylabel(f"{error.replace('_', ' ')} against the exact core")
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=7)
     for ax in list(axes.flat)[len(cases):]:
@@ -258,8 +260,8 @@ def plot_stability_map(table, outputs) -> None:
     from matplotlib.colors import ListedColormap
 
     ax.imshow(grid, cmap=ListedColormap(["#a6dba0", "#fdb863", "#e66101"]), vmin=0, vmax=2, aspect="auto")
-    ax.set_xticks(range(len(methods)), methods, rotation=30, ha="right", fontsize=8)
-    ax.set_yticks(range(len(cases)), cases, fontsize=8)
+    ax.set_xticks(range(len(methods)), [label_of(m) for m in methods], rotation=30, ha="right", fontsize=8)
+    ax.set_yticks(range(len(cases)), [label_of(c) for c in cases], fontsize=8)
     ax.set_title("Extreme cases: green ok (penetration <= 1e-6 of the gap, amplitude within 1e-3 of the core's),\n"
                  "orange finished outside that, red failed or non-finite (largest penetration beyond a wall)",
                  fontsize=9)
@@ -271,10 +273,22 @@ def plot_stability_map(table, outputs) -> None:
 
 ROBUSTNESS_PANELS = (
     ("scale", "force amplitude over the design's", "log"),
-    ("drift", "drift of the structure's frequency", "linear"),
+    ("drift", "drift of the structure's frequency (%)", "linear"),
     ("damping", "damper damping ratio", "log"),
     ("e", "coefficient of restitution e", "linear"),
 )
+
+
+def _few_ticks(ax, xscale: str, percent: bool = False) -> None:
+    """At most five plain tick labels on the x axis (no 10^x, no crowding)."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
+
+    if xscale == "log":
+        ax.xaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0), numticks=5))
+        ax.xaxis.set_minor_formatter(NullFormatter())
+    else:
+        ax.xaxis.set_major_locator(MaxNLocator(nbins=5))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{100 * v:g}" if percent else f"{v:g}"))
 
 
 def plot_robustness(designs: dict, outputs) -> None:
@@ -282,7 +296,7 @@ def plot_robustness(designs: dict, outputs) -> None:
 
     designs: design name -> its robustness dataset.
     """
-    fig, axes = plt.subplots(2, 3, figsize=(15.0, 8.0))
+    fig, axes = plt.subplots(2, 3, figsize=(15.0, 8.0), layout="constrained")
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     design_at = {"scale": lambda ds: 1.0, "drift": lambda ds: 0.0, "e": lambda ds: None, "damping": lambda ds: None}
     for ax, (name, label, xscale) in zip(axes.flat, ROBUSTNESS_PANELS):
@@ -290,20 +304,26 @@ def plot_robustness(designs: dict, outputs) -> None:
             if f"X_m_vs_{name}" not in ds:
                 continue
             color = colors[k % len(colors)]
-            ax.plot(ds[name].values, ds[f"X_m_vs_{name}"].values, "o-", ms=3, lw=1.0, color=color, label=design)
+            ax.plot(ds[name].values, ds[f"X_m_vs_{name}"].values, "o-", ms=3, lw=1.0, color=color,
+                    label=label_of(design))
             at = design_at[name](ds)
             if at is not None:
                 ax.plot([at], [float(ds["X_m_design"])], "*", ms=9, color=color)
         ax.set_xscale(xscale)
+        _few_ticks(ax, xscale, percent=name == "drift")
         ax.set_xlabel(label)
         ax.set_ylabel("amplitude ratio X_m")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
     _plot_units(axes.flat[len(ROBUSTNESS_PANELS)], designs, colors)
-    axes.flat[-1].set_visible(False)
+    # one legend for every panel, in the sixth place
+    legend_ax = axes.flat[-1]
+    legend_ax.axis("off")
+    handles = [plt.Line2D([], [], color=colors[k % len(colors)], marker="o", ms=4, label=label_of(design))
+               for k, design in enumerate(designs)]
+    handles.append(plt.Line2D([], [], color="0.3", marker="*", ms=9, ls="none", label="design point"))
+    legend_ax.legend(handles=handles, loc="center", fontsize=9, frameon=False, title="design")
     fig.suptitle("Table 1 in numbers: X_m as what the designer does not control changes (stars: design points)",
                  fontsize=10)
-    fig.tight_layout()
     for out in outputs:
         save_atomic(fig, out)
     plt.close(fig)
@@ -317,61 +337,85 @@ def _plot_units(ax, designs: dict, colors) -> None:
             continue
         color, n = colors[k % len(colors)], ds["units"].values
         ens = ds["X_m_units_ensemble"].values
-        ax.plot(n, ds["X_m_units_symmetric"].values, "o-", ms=3, lw=1.0, color=color, label=design)
+        ax.plot(n, ds["X_m_units_symmetric"].values, "o-", ms=3, lw=1.0, color=color, label=label_of(design))
         ax.plot(n, ds["X_m_units_staggered"].values, "s--", ms=3, lw=1.0, color=color)
         ax.fill_between(n, ens.min(axis=1), ens.max(axis=1), color=color, alpha=0.15, lw=0)
     ax.set_xlabel("number of units (same total mass and gap)")
     ax.set_ylabel("amplitude ratio X_m")
     ax.set_title("solid: units start together; dashed: staggered; band: random starts", fontsize=8)
+    ax.xaxis.set_major_locator(plt.MaxNLocator(integer=True))
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
 
 
 XM_LEVELS = [0.0, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5, 0.7, 1.0, 1.5]
 
 
-def _cell_edges(centres) -> np.ndarray:
-    """Edges of cells centred on the grid's values (a single value gets a cell of 10 % of itself)."""
-    c = np.asarray(centres, dtype=float)
+def _cell_edges(centres, log: bool = False) -> np.ndarray:
+    """Edges of cells centred on the grid's values (in log space for a log axis; a single value gets a cell of
+    10 % of itself)."""
+    c = np.log(np.asarray(centres, dtype=float)) if log else np.asarray(centres, dtype=float)
     if len(c) == 1:
         half = 0.05 * (abs(c[0]) or 1.0)
-        return np.array([c[0] - half, c[0] + half])
-    mid = 0.5 * (c[1:] + c[:-1])
-    return np.concatenate(([2 * c[0] - mid[0]], mid, [2 * c[-1] - mid[-1]]))
+        edges = np.array([c[0] - half, c[0] + half])
+    else:
+        mid = 0.5 * (c[1:] + c[:-1])
+        edges = np.concatenate(([2 * c[0] - mid[0]], mid, [2 * c[-1] - mid[-1]]))
+    return np.exp(edges) if log else edges
+
+
+def _geometric(values) -> bool:
+    """A grid of positive values spread over more than a factor of 3: drawn on a log axis."""
+    v = np.asarray(values, dtype=float)
+    return len(v) > 1 and bool(np.all(v > 0)) and v.max() / v.min() > 3.0
 
 
 def _chart_panel(ax, x, y, values, norm, title: str, xlabel: str, ylabel: str):
-    """X_m on a chart's grid as coloured cells (no interpolation between runs), with contour lines."""
-    mesh = ax.pcolormesh(_cell_edges(x), _cell_edges(y), values, shading="flat", cmap="viridis_r", norm=norm)
+    """X_m on a chart's grid as coloured cells (no interpolation between runs), with labelled contour lines;
+    a geometric grid on a log axis, ticks at the grid's own values, the axes ending with the cells."""
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
+
+    logx, logy = _geometric(x), _geometric(y)
+    xe, ye = _cell_edges(x, logx), _cell_edges(y, logy)
+    mesh = ax.pcolormesh(xe, ye, values, shading="flat", cmap="viridis_r", norm=norm)
     if min(values.shape) >= 2:
-        lines = ax.contour(x, y, values, levels=XM_LEVELS[1:], colors="k", linewidths=0.5)
-        ax.clabel(lines, fontsize=6, fmt="%g")
-    ax.set_title(title, fontsize=9)
+        lines = ax.contour(x, y, values, levels=XM_LEVELS[1:], colors="k", linewidths=0.6)
+        ax.clabel(lines, fontsize=8, fmt="%g")
+    for axis, log, grid, edges in ((ax.xaxis, logx, x, xe), (ax.yaxis, logy, y, ye)):
+        if log:
+            (ax.set_xscale if axis is ax.xaxis else ax.set_yscale)("log")
+            shown = grid if len(grid) <= 6 else [v for v in (0.2, 0.5, 1.0, 2.0, 5.0, 10.0) if edges[0] <= v <= edges[-1]]
+            axis.set_major_locator(FixedLocator(shown))
+            axis.set_minor_locator(NullLocator())
+            axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.set_xlim(xe[0], xe[-1])
+    ax.set_ylim(ye[0], ye[-1])
+    ax.set_title(title, fontsize=10)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     return mesh
 
 
 def plot_design_charts(charts: dict, outputs) -> None:
-    """The design charts: the CID's X_m over (mu, g) and the PID's at its best g over (mu, r'), per e;
-    beside them X_m at each damper's best design and the best gap ratio against mu."""
+    """The design charts: per e, the CID's X_m over (mu, g) beside the PID's at its best g over (mu, r'); below
+    them X_m at each damper's best design and the best gap ratio against mu.  Two charts a row, so that a page's
+    width shows their contour labels."""
     from matplotlib.colors import BoundaryNorm
 
     cid, pid, tmd = charts["cid"], charts["pid"], charts["tmd"]
     es = cid["e"].values
     norm = BoundaryNorm(XM_LEVELS, plt.get_cmap("viridis_r").N, extend="max")
-    fig, axes = plt.subplots(2, len(es) + 1, figsize=(4.2 * (len(es) + 1), 8.0), squeeze=False,
+    fig, axes = plt.subplots(len(es) + 1, 2, figsize=(11.0, 3.7 * (len(es) + 1)), squeeze=False,
                              layout="constrained")
     for j, e in enumerate(es):
         c = cid.sel(e=e)
-        mesh = _chart_panel(axes[0, j], c["mu"].values, c["gap_ratio"].values, c["X_m"].values.T, norm,
-                            f"CID, e = {e:g}: X_m (worst start)", "mass ratio mu", "gap ratio g")
-        axes[0, j].plot(c["mu"].values, c["gap_ratio_best"].values, "w*-", ms=6, lw=0.8)
+        mesh = _chart_panel(axes[j, 0], c["mu"].values, c["gap_ratio"].values, c["X_m"].values.T, norm,
+                            f"CID, e = {e:g}: X_m (worst start; stars: best g)", "mass ratio μ", "gap ratio g")
+        axes[j, 0].plot(c["mu"].values, c["gap_ratio_best"].values, "w*-", ms=7, lw=0.8)
         p = pid.sel(e=e)
-        _chart_panel(axes[1, j], p["mu"].values, p["rp"].values, p["X_m_best"].values.T, norm,
-                     f"PID, e = {e:g}: X_m at its best g", "mass ratio mu", "tuning r'")
+        _chart_panel(axes[j, 1], p["mu"].values, p["rp"].values, p["X_m_best"].values.T, norm,
+                     f"PID, e = {e:g}: X_m at its best g", "mass ratio μ", "tuning r'")
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    best, gaps = axes[0, -1], axes[1, -1]
+    best, gaps = axes[-1, 0], axes[-1, 1]
     for j, e in enumerate(es):
         color = colors[j % len(colors)]
         best.plot(cid["mu"].values, cid["X_m_best"].sel(e=e).values, "o-", color=color, ms=3, label=f"CID e={e:g}")
@@ -384,13 +428,18 @@ def plot_design_charts(charts: dict, outputs) -> None:
         gaps.plot(p["mu"].values, p["gap_ratio_best"].isel(rp=k).values, "s--", color=color, ms=3,
                   label=f"PID e={e:g}")
     best.plot(tmd["mu"].values, tmd["X_m"].values, "k-", lw=1.5, label="TMD (equal-peak optimum)")
-    best.set(xlabel="mass ratio mu", ylabel="X_m at the best design", title="each damper at its best")
-    gaps.set(xlabel="mass ratio mu", ylabel="best gap ratio g", title="the gap of each best design")
+    best.set(xlabel="mass ratio μ", ylabel="X_m at the best design", title="each damper at its best")
+    gaps.set(xlabel="mass ratio μ", ylabel="best gap ratio g", title="the gap of each best design")
     for ax in (best, gaps):
+        if _geometric(cid["mu"].values):
+            ax.set_xscale("log")
+            ax.xaxis.set_major_locator(plt.FixedLocator(cid["mu"].values))
+            ax.xaxis.set_minor_locator(plt.NullLocator())
+            ax.xaxis.set_major_formatter(plt.FuncFormatter(lambda v, _: f"{v:g}"))
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=6)
-    fig.colorbar(mesh, ax=axes[:, :-1], shrink=0.8, label="X_m = x_max / A_max")
-    fig.suptitle(textwrap.fill(f"Design charts for {cid.attrs['design_point']}", 140), fontsize=9)
+        ax.legend(fontsize=7, ncol=2)
+    fig.colorbar(mesh, ax=axes[:-1, :], shrink=0.6, label="X_m = x_max / A_max")
+    fig.suptitle(textwrap.fill(f"Design charts for {cid.attrs['design_point']}", 120), fontsize=10)
     for out in outputs:
         save_atomic(fig, out)
     plt.close(fig)
@@ -407,8 +456,9 @@ def plot_loads_reduction(datasets: dict, outputs) -> None:
     columns = [(f, soil, title) for f, soil, title in LOAD_COLUMNS
                if f in datasets and (soil is None or soil in datasets[f]["soil"].values)]
     names = list(datasets[columns[0][0]]["building"].values)
-    fig, axes = plt.subplots(len(names), len(columns), figsize=(4.0 * len(columns), 2.3 * len(names)),
-                             squeeze=False, sharex=True, layout="constrained")
+    # small multiples on one scale: a building a row (named at its left), a load group a column (named on top)
+    fig, axes = plt.subplots(len(names), len(columns), figsize=(3.6 * len(columns) + 1.2, 1.35 * len(names) + 1.2),
+                             squeeze=False, sharex=True, sharey=True, layout="constrained")
     for j, (family, soil, title) in enumerate(columns):
         ds = datasets[family] if soil is None else datasets[family].sel(soil=soil)
         ratio = ds["peak_roof_ratio"].mean("record" if family == "records" else "seed")
@@ -420,15 +470,18 @@ def plot_loads_reduction(datasets: dict, outputs) -> None:
                             "o-" if k == len(ratio["mass_ratio"]) - 1 else "s--", ms=3, lw=1.0,
                             color=DAMPER_COLORS[str(damper)], label=f"{str(damper).upper()} {mr:g}")
             ax.axhline(1.0, color="k", lw=0.6)
-            ax.set_title(f"{building}: {title}", fontsize=8)
             ax.grid(alpha=0.3)
+            ax.tick_params(labelsize=7)
+            if i == 0:
+                ax.set_title(title, fontsize=9)
             if j == 0:
-                ax.set_ylabel("peak roof / bare")
+                ax.set_ylabel(label_of(building).replace(", ", "\n"), fontsize=8)
             if i == len(names) - 1:
                 ax.set_xlabel("PGA (g)")
-    axes[0, 0].legend(fontsize=6, ncol=2)
-    fig.suptitle("Peak roof displacement with each damper over the bare building's (below 1: it helps)",
-                 fontsize=10)
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=len(labels), fontsize=8, frameon=False)
+    fig.suptitle("Peak roof displacement with each damper over the bare building's (below 1: it helps; "
+                 "solid: the larger mass ratio)", fontsize=10)
     for out in outputs:
         save_atomic(fig, out)
     plt.close(fig)

@@ -23,18 +23,21 @@ from __future__ import annotations
 import base64
 import csv
 import hashlib
+import io
 import itertools
 import json
 import logging
-import os
 import re
-import struct
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from types import SimpleNamespace
 
+import pandas as pd
+from PIL import Image, UnidentifiedImageError
+
 from impact import __version__
 from impact.outputs.files import write_text_atomic
+from impact.outputs.labels import cell_text, column_label, label
 from impact.outputs.provenance import git_state, now_utc, package_versions
 
 log = logging.getLogger(__name__)
@@ -158,17 +161,22 @@ def collect_provenance(config=None, executor: str = "unknown", benchmarks: Itera
     }
 
 
-# set by the workflow when it has read its configuration: Snakemake's report reads its metadata
-# (workflow/report/metadata.yaml) in the same process, but cannot pass the configuration to it
-CONFIG_HASH_VARIABLE = "IMPACT_CONFIG_SHA256"
+def landing_page(overview, config, out) -> str:
+    """The description Snakemake's report opens on (its ``report:``): the workflow's overview, then the run's
+    provenance as labelled fields (commit, uncommitted changes, the configuration's hash, code version), the
+    same values as the HTML report's.  Written to ``out``; returns its path.
 
-
-def snakemake_report_metadata() -> dict:
-    """The commit and configuration hash for the landing page of ``snakemake --report``."""
-
+    Not a ``--report-metadata`` file: Snakemake 9.27 renders each string value there into docutils' whole
+    parts dictionary, so the page showed WHOLE / ENCODING / VERSION blocks instead of the fields.
+    """
     state = git_state()
-    return {"git_commit": state["git_commit"], "git_dirty": state["git_dirty"], "code_version": __version__,
-            "config_sha256": os.environ.get(CONFIG_HASH_VARIABLE, "not given")}
+    fields = {"git commit": f"``{state['git_commit']}``", "uncommitted changes": state["git_dirty"],
+              "configuration sha256": f"``{config_hash(config)}``", "code version": __version__}
+    text = Path(overview).read_text(encoding="utf-8").rstrip("\n")
+    text += "\n\nProvenance of this run\n----------------------\n\n"
+    text += "".join(f":{name}: {value}\n" for name, value in fields.items())
+    write_text_atomic(out, text)
+    return str(Path(out).resolve())
 
 
 # --------------------------------------------------------------------------- tables and figures
@@ -189,12 +197,15 @@ def _is_number(text: str) -> bool:
 
 
 def table_cell(text: str) -> dict:
-    """A table cell as the template shows it: floats to 4 significant digits, the file's text kept."""
+    """A table cell as the template shows it: words for what the file writes as an identifier, a boolean or a
+    missing value (outputs.labels), floats to 4 significant digits; the file's text kept beside."""
     text = "" if text is None else text
-    number = _is_number(text)
+    number = _is_number(text) and text.strip().lower() not in ("nan", "inf", "-inf")
     shown = text
-    if number and re.search(r"[.eE]", text) and text.strip().lower() not in ("nan", "inf", "-inf"):
+    if number and re.search(r"[.eE]", text):
         shown = format(float(text), ".4g")
+    elif not number:
+        shown = cell_text(text)
     return {"text": text, "shown": shown, "number": number}
 
 
@@ -207,12 +218,10 @@ def read_table(path) -> tuple[list[str], list[list[str]]]:
         if isinstance(obj, list) and obj and all(isinstance(r, dict) for r in obj):
             cols = list(dict.fromkeys(k for r in obj for k in r))
             return cols, [[_json_text(r.get(c, "")) for c in cols] for r in obj]
-        return ["quantity", "value"], [[k, _json_text(v)] for k, v in _flatten(obj)]
-    with open(path, newline="") as fh:
-        rows = list(csv.reader(fh))
-    if not rows:
-        return [], []
-    return rows[0], [r + [""] * (len(rows[0]) - len(r)) for r in rows[1:]]
+        return ["quantity", "value"], [[_key_text(k), _json_text(v)] for k, v in _flatten(obj)]
+    # every cell as the file writes it (no type guessed, no NaN made): the report shows what the file holds
+    frame = pd.read_csv(path, dtype=str, keep_default_na=False)
+    return list(frame.columns), frame.values.tolist()
 
 
 def _json_text(v) -> str:
@@ -225,12 +234,19 @@ def _json_text(v) -> str:
     return "" if v is None else str(v)
 
 
-def _flatten(obj, prefix=""):
+def _flatten(obj, prefix=()):
+    """(path of keys, value) of every leaf of a nested object."""
     if isinstance(obj, dict):
         for k in sorted(obj):
-            yield from _flatten(obj[k], f"{prefix}{k}." if isinstance(obj[k], dict) else f"{prefix}{k}")
+            yield from _flatten(obj[k], (*prefix, str(k)))
     else:
-        yield prefix.rstrip("."), obj
+        yield prefix, obj
+
+
+def _key_text(path: tuple) -> str:
+    """A nested key as words: each level labelled, the levels joined by arrows."""
+    return " › ".join(label(k).replace("_", " ").replace("lambda", "λ") for k in path)
+
 
 _TRUE = {"true", "yes", "1", "ok", "pass"}
 _FALSE = {"false", "no", "0", "fail"}
@@ -243,10 +259,10 @@ def table_summary(columns: list[str], rows: list[list[str]], highlight: Mapping 
         values = [r[j].strip().lower() for r in rows if j < len(r) and r[j].strip()]
         if values and all(v in _TRUE | _FALSE for v in values) and not all(_is_number(v) for v in values):
             n_true = sum(v in _TRUE for v in values)
-            bits.append(f"{col}: {n_true} of {len(values)} true")
+            bits.append(f"{column_label(col)}: {n_true} of {len(values)} yes")
     if highlight:
         n = sum(1 for r in rows if _highlighted(columns, r, highlight))
-        bits.append(f"{n} highlighted ({highlight['column']} = {highlight['equals']})")
+        bits.append(f"{n} highlighted ({column_label(highlight['column'])}: {cell_text(highlight['equals'])})")
     return "; ".join(bits)
 
 
@@ -297,9 +313,12 @@ _MIME = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".gif
 
 
 def _png_size(data: bytes):
-    if data[:8] == b"\x89PNG\r\n\x1a\n" and data[12:16] == b"IHDR":
-        return struct.unpack(">II", data[16:24])
-    return None
+    """(width, height) of a PNG, or None if the bytes are not one (Pillow reads only the header)."""
+    try:
+        with Image.open(io.BytesIO(data)) as image:
+            return image.size if image.format == "PNG" else None
+    except (UnidentifiedImageError, OSError):
+        return None
 
 
 def data_uri(path) -> tuple[str, tuple | None]:
@@ -319,7 +338,10 @@ def _table_view(path: Path) -> dict:
     summary = _comparison_summary(columns, rows) if highlight else ""
     if not summary and path.suffix.lower() != ".json":  # a JSON object is a list of values, not rows
         summary = table_summary(columns, rows, highlight)
-    return {"kind": "table", "columns": columns, "summary": summary, "folded": len(rows) > LONG_TABLE,
+    # the page's own table (not DataFrame.to_html): it highlights the rows that miss the paper, folds a long
+    # table and shows each cell in words with the file's text kept as its tooltip
+    return {"kind": "table", "columns": [{"id": c, "label": column_label(c)} for c in columns], "summary": summary,
+            "folded": len(rows) > LONG_TABLE,
             "rows": [{"miss": _highlighted(columns, r, highlight), "cells": [table_cell(v) for v in r]}
                      for r in rows]}
 

@@ -23,6 +23,7 @@ from impact.closed_form.masri import BRANCHES, masri_2eipc, orbit_initial_state,
 from impact.engine import paper_loop as K
 from impact.engine.paper import simulate
 from impact.model.params import Protocol, System, a_max, frequency_grid
+from impact.outputs.files import as_integers, flag
 from impact.stages.masri.charts import branches
 
 JUST_AFTER_RIGHT_IMPACT = K.contact_code(K.MODE_FREE, 1, 0)
@@ -203,6 +204,11 @@ def to_dataset(table: pd.DataFrame, attrs: dict) -> xr.Dataset:
     for name in ds.data_vars:
         ds[name].attrs.setdefault("units", "1")
         ds[name].attrs.setdefault("long_name", name.replace("_", " "))
+    # yes/no columns (NaN where a root has no run) are CF flags, the impact count an integer; -1 is missing
+    flags = [n for n in ds.data_vars if ds[n].dtype == bool or n == "stays" or n.startswith("landed_on_2eipc")]
+    for name in flags:
+        ds[name].attrs = flag(ds[name].attrs["long_name"], "no", "yes")
+    ds = as_integers(ds, [*flags, "impacts"], missing=-1)
     ds["mu"].attrs.update(units="1", long_name="mass ratio")
     ds["e"].attrs.update(units="1", long_name="coefficient of restitution")
     ds["r"].attrs.update(units="1", long_name="frequency ratio")

@@ -30,6 +30,7 @@ from impact.stages.numerics.plan import (
 from impact.stages.numerics.tables import (
     _outcome,
     stability_table,
+    with_integer_counts,
 )
 
 
@@ -197,6 +198,7 @@ def work_precision(cfg: dict, cases=None, families=None, log=None) -> xr.Dataset
     ds["setting_value"] = (("integrator", "setting"), setting_value, {
         "units": "1", "long_name": "method setting: rtol, steps per natural period, or contact stiffness"})
     ds["setting_name"] = ("integrator", [ladders[m][0] for m in methods], {"long_name": "what the setting is"})
+    ds = with_integer_counts(ds)
     ds["predictability_horizon"] = ("case", [horizon[c] for c in cases], {
         "units": "1", "long_name": "dimensionless time (Omega t) after which round-off-perturbed runs differ by 1e-3"})
     ds.attrs.update(reference="the exact event-driven core (impact.engine.paper)", k_impacts=K_IMPACTS,

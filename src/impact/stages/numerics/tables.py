@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from impact.outputs.files import as_integers, flag
 from impact.stages.numerics.plan import (
     Timeout,
     extreme_cases,
@@ -26,12 +27,22 @@ def _outcome(out) -> str:
     return "ok" if out["status"] == "ok" and np.isfinite(out["amplitude"]) else str(out["status"])
 
 
+#: the work-precision measures that are counts, and the flag of a failed run: integers, -1 where the run has none
+WHOLE = ("nfev", "impacts", "impacts_compared", "failed")
+
+
+def with_integer_counts(ds: xr.Dataset) -> xr.Dataset:
+    """The counts and the failure flag as integers (read back, -1 is NaN: a run that failed has no count)."""
+    ds["failed"].attrs = flag("the run failed (over its time budget, non-finite or an error)", "finished", "failed")
+    return as_integers(ds, WHOLE, missing=-1)
+
+
 def combine_work_precision(parts, cfg: dict) -> xr.Dataset:
     """The pieces of one study (each some cases and some families) as one dataset, in the study's order."""
     parts = list(parts)
     ds = xr.merge(parts, compat="no_conflicts", join="outer", combine_attrs="override")
     ds.attrs = {k: v for k, v in parts[0].attrs.items() if k in WORK_PRECISION_ATTRS}  # not a piece's provenance
-    return ds.reindex(case=list(work_precision_cases(cfg)), integrator=list(method_ladders(cfg)))
+    return with_integer_counts(ds.reindex(case=list(work_precision_cases(cfg)), integrator=list(method_ladders(cfg))))
 
 
 def speed_at_equal_error(ds: xr.Dataset, error: str = "amplitude_error") -> pd.DataFrame:
