@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from reference import HANG_GUARD_S
 
 import impact
 
@@ -53,7 +54,7 @@ def test_the_package_is_typed_and_its_stubs_name_what_it_exports():
 @pytest.mark.slow
 def test_the_documentation_site_builds_without_a_warning(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html", str(ROOT / "docs"),
-                           str(tmp_path / "html")], capture_output=True, text=True, timeout=600)
+                           str(tmp_path / "html")], capture_output=True, text=True, timeout=HANG_GUARD_S)
     assert proc.returncode == 0, proc.stderr[-3000:]
     api = (tmp_path / "html" / "api.html").read_text()
     for name in ("impact.engine.run.simulate", "impact.model.scene.Scene", "impact.model.building.Building"):

@@ -382,8 +382,9 @@ def test_stability_ok_means_finished_and_within_tolerance():
                                 ("b", "broken"): False}
 
 
+# no budget relative to the core here: whether a run finishes would then be a ratio of two machine timings
 TINY_STUDY = {"periods": 3, "repeats": 2, "ivp_methods": ["RK45"], "rtol": [1e-6], "steps_per_period": [100],
-              "stiffness": [1e4], "stability_periods": 2, "budget": 10}
+              "stiffness": [1e4], "stability_periods": 2, "budget": 10, "budget_over_core": None}
 
 
 def test_a_baseline_over_budget_is_recorded_as_failed_too_slow():
@@ -405,7 +406,7 @@ def test_a_baseline_over_budget_is_recorded_as_failed_too_slow():
     assert np.isnan(ds["wall_time"].sel(integrator="ivp_RK45", setting=0).item())
 
 
-def test_a_run_over_a_second_is_timed_once_and_shorter_runs_keep_the_minimum(monkeypatch):
+def test_a_run_over_the_threshold_is_timed_once_and_shorter_runs_keep_the_minimum():
     import time
 
     from impact.stages.numerics import runs as NR
@@ -417,12 +418,25 @@ def test_a_run_over_a_second_is_timed_once_and_shorter_runs_keep_the_minimum(mon
         time.sleep(seconds)
         return {"status": "ok"}
 
-    monkeypatch.setattr(NR, "ONE_REPEAT_ABOVE", 0.05)
-    best, out = NR.timed_repeats(lambda: run(0.06), 10.0, 3)
+    best, out = NR.timed_repeats(lambda: run(0.06), 10.0, 3, 0.05)
     assert len(calls) == 1 and best >= 0.06 and out == {"status": "ok"}
     calls.clear()
-    best, _ = NR.timed_repeats(lambda: run(0.001), 10.0, 3)
+    best, _ = NR.timed_repeats(lambda: run(0.001), 10.0, 3, 0.05)
     assert len(calls) == 3 and best < 0.05
+
+
+def test_a_baseline_far_slower_than_the_core_is_stopped_there_and_says_so():
+    """The cost rule: a baseline run may take budget_over_core times the core's run on the same case (here a
+    millionth of it, which no run meets), never the core itself, and it is recorded as too slow."""
+    from impact.stages.numerics import plan as NP
+    from impact.stages.numerics import runs as NR
+
+    far = {**TINY_STUDY, "budget_over_core": 1e-6}
+    assert NP.run_budget(far, 0.002) == pytest.approx(2e-9) and NP.run_budget(TINY_STUDY, 0.002) == 10
+    assert NP.run_budget({"budget": 10}, 0.002) == pytest.approx(10)  # 1e4 x 2 ms is 20 s: the budget rules
+    runs = NR.stability_runs(far, families=["ivp", "core"])
+    assert runs.loc[runs["method"] != "core", "status"].str.startswith(f"failed: {TOO_SLOW}").all()
+    assert (runs.loc[runs["method"] == "core", "status"] == "ok").all()
 
 
 def test_the_numerics_pieces_join_into_the_whole_study():

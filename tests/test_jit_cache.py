@@ -8,6 +8,7 @@ import subprocess
 import sys
 
 import pytest
+from reference import HANG_GUARD_S
 
 pytestmark = pytest.mark.slow
 
@@ -18,14 +19,14 @@ def test_two_processes_compiling_at_once_agree(tmp_path):
            "--average-from", "10"]
     procs = [subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
              for _ in range(2)]
-    outs = [p.communicate(timeout=600) for p in procs]
+    outs = [p.communicate(timeout=HANG_GUARD_S) for p in procs]
     assert [p.returncode for p in procs] == [0, 0], [err for _, err in outs]
     results = [json.loads(out) for out, _ in outs]
     assert results[0] == results[1]
     # the cache was written once and is complete: a third process only loads it
     files = list((tmp_path / "cache").rglob("*.nbi"))
     assert files
-    third = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=600)
+    third = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=HANG_GUARD_S)
     assert third.returncode == 0 and json.loads(third.stdout) == results[0]
     # a compile says so, once, on stderr: the process that compiled, not the one that waited and loaded, nor
     # a later one

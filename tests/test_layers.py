@@ -219,5 +219,5 @@ def test_a_content_edit_changes_the_digest_of_exactly_the_scripts_that_reach_it(
     reaches = {s.stem for s in SCRIPTS.glob("*.py") if edited.resolve() in code_deps.library_files(s, copy)}
     assert {s for s in before if before[s] != after[s]} == reaches
     assert {"sweep_curve", "design_sweep", "continuation_curve", "ensemble_curve", "masri_check",
-            "validation_case", "numerics_work_precision_piece", "loads_damper", "robustness_design"} <= reaches
+            "validation_cases", "numerics_work_precision_piece", "loads_damper", "robustness_design"} <= reaches
     assert not {"figure", "report", "tmd_optimum", "paper_vs_reproduced"} & reaches

@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 import pytest
+from reference import HANG_GUARD_S
 from scipy import signal
 
 from impact.engine.paper import simulate
@@ -417,7 +418,7 @@ def test_a_scene_compiles_only_what_it_uses():
         "sig = run_scene.signatures[0]\n"
         "print(str(sig[1]), str(sig[2]), str(sig[3]), str(sig[4]).split('(')[0])\n"
     )
-    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=600)
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=HANG_GUARD_S)
     assert out.returncode == 0, out.stderr
     springs, fric, harm, record = out.stdout.split()
     assert (springs, fric, harm) == ("none", "none", "none")

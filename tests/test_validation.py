@@ -164,3 +164,14 @@ def test_a_filled_configuration_is_a_fresh_copy_every_call():
     for _ in range(2):  # a bad configuration is refused every time, not only the first
         with pytest.raises(ValueError, match="unknown key"):
             G.validation_config({"protocl": {}})
+
+
+def test_the_workflow_runs_one_job_per_wall_and_refuses_cases_that_are_not_a_grid():
+    """One job per wall material, each every setup (ball, gap, r') on it: the grid is such a product, the smoke
+    subset must be one too, and a list that is not is refused naming what is missing."""
+    walls, setups = G.batches(G.all_cases(None))
+    assert len(walls) == 4 and len(setups) == 27
+    assert G.batches(G.study_cases(G.validation_config(None, smoke=True), smoke=True)) == (
+        ["steel", "cork_3.0mm"], ["mu0.0252_d20_rp1"])
+    with pytest.raises(ValueError, match="missing mu0.0054_d40_rp0.9_steel"):
+        G.batches([G.Case(0.0252, 20.0, 1.0, "steel"), G.Case(0.0054, 40.0, 0.9, "cork_3.0mm")])

@@ -1,6 +1,7 @@
 # Shared helpers: the configuration's validation, the study's curves from it, input and param functions.
 import dataclasses
 import os
+import re
 
 import yaml
 from snakemake.utils import validate
@@ -10,6 +11,7 @@ from impact.outputs.archive import archive_name
 from impact.outputs.code_deps import library_digest
 from impact.outputs.labels import label
 from impact.stages.validation.grid import SCHEMA_PATH as RIG_SCHEMA
+from impact.stages.validation.grid import batches as rig_batches
 from impact.stages.validation.grid import study_cases, validation_config
 from impact.stages.numerics.plan import stability_families, work_precision_pieces
 from impact.outputs.provenance import git_state
@@ -90,13 +92,16 @@ STABILITY_FAMILIES = stability_families(config["numerics"]) if NUMERICS else []
 # the synthetic experiment: the rig's file, validated against its schema (which fills in every
 # default), and the cases of its grid (the smoke subset when asked)
 RIG_FILE = VALIDATION.get("config", "config/validation.yaml")
-RIG, RIG_CASES = {}, {}
+RIG, RIG_CASES, RIG_WALLS, RIG_SETUPS = {}, {}, [], []
 if VALIDATION:
     with open(RIG_FILE) as fh:
         RIG = yaml.safe_load(fh) or {}
     validate(RIG, str(RIG_SCHEMA))
     RIG = validation_config(RIG, smoke=VALIDATION.get("smoke", False))
-    RIG_CASES = {c.id: dataclasses.asdict(c) for c in study_cases(RIG, VALIDATION.get("smoke", False))}
+    _cases = study_cases(RIG, VALIDATION.get("smoke", False))
+    RIG_CASES = {c.id: dataclasses.asdict(c) for c in _cases}
+    # one job per wall, each running every setup (ball, gap, r') on it
+    RIG_WALLS, RIG_SETUPS = rig_batches(_cases)
 # Table 1 in numbers: its designs, and the sweeps their optimum gaps come from
 ROBUSTNESS = stage_config("robustness") is not None
 ROBUSTNESS_DESIGNS = design_names(config) if ROBUSTNESS else []

@@ -1,7 +1,8 @@
 # Cross-validation against the experiment (Figs. 3-5): the model of Eq. 4 against a
 # higher-fidelity virtual test rig, through the same analysis code as real records.
-# One job per case of the paper's grid, then the grid's tables, the drop tests, the
-# data of Figs. 3 and 5, the claims and the figures.  Everything here is synthetic.
+# One job per wall material, each running every case of the paper's grid on that wall (its own file
+# and log line each), then the grid's tables, the drop tests, the data of Figs. 3 and 5, the claims and
+# the figures.  Everything here is synthetic.
 
 
 rule validation_contact_laws:
@@ -26,33 +27,35 @@ rule validation_contact_laws:
         "../scripts/validation_contact_laws.py"
 
 
-rule validation_case:
+rule validation_cases:
     input:
         rig_config=RIG_FILE,
         contact_laws=rules.validation_contact_laws.output[0],
     output:
-        "results/validation/cases/{case}.json",
+        expand("results/validation/cases/{setup}_{{wall}}.json", setup=RIG_SETUPS),
     log:
-        "results/logs/validation_case/{case}.log",
+        "results/logs/validation_cases/{wall}.log",
     benchmark:
-        "results/benchmarks/validation_case/{case}.tsv"
+        "results/benchmarks/validation_cases/{wall}.tsv"
+    wildcard_constraints:
+        wall="|".join(re.escape(wall) for wall in RIG_WALLS) or "none",
     conda:
         ENV
     threads: 1
     resources:
-        runtime=10,
+        runtime=60,
         mem_mb=1000,
     params:
-        library=library("validation_case"),
+        library=library("validation_cases"),
         rig=RIG,
-        case=lambda wc: RIG_CASES[wc.case],
+        cases=lambda wc: [RIG_CASES[f"{setup}_{wc.wall}"] for setup in RIG_SETUPS],
     script:
-        "../scripts/validation_case.py"
+        "../scripts/validation_cases.py"
 
 
 rule validation_grid:
     input:
-        cases=expand(rules.validation_case.output[0], case=list(RIG_CASES)),
+        cases=expand(rules.validation_cases.output, wall=RIG_WALLS),
     output:
         table=report(
             "results/validation/validation_table.csv",
@@ -228,7 +231,7 @@ rule validation_figures:
 
 if VALIDATION:
     register(rules.validation_contact_laws)
-    register(rules.validation_case, case=list(RIG_CASES))
+    register(rules.validation_cases, wall=RIG_WALLS)
     register(rules.validation_grid, report=("table",))
     register(rules.validation_drop_tests)
     register(rules.validation_fig3_data)

@@ -14,10 +14,13 @@ K_IMPACTS = 20
 FAMILIES = ("core", "ivp", "rk4", "moreau_jean", "penalty")
 
 
-ONE_REPEAT_ABOVE = 1.0  # s: a run this long is timed once; shorter runs keep the minimum of the repeats
-
-
-DEFAULT_BUDGET = 10.0  # s per run (the configuration's numerics.budget)
+# The cost rule (the configuration's numerics section states it too): each run costs only what it shows.  A run
+# longer than repeat_below is timed once, its timer's noise being far below its time; a shorter one keeps the
+# minimum of `repeats`.  A baseline run stops at budget_over_core times the exact core's time on the same run
+# (by then it has shown it is that much slower), or at `budget` seconds, whichever comes first.
+DEFAULT_REPEAT_BELOW = 0.1   # s
+DEFAULT_BUDGET = 10.0        # s per run
+DEFAULT_BUDGET_OVER_CORE = 1.0e4
 
 
 def family(method: str) -> str:
@@ -26,9 +29,24 @@ def family(method: str) -> str:
 
 
 def work_precision_cases(cfg: dict) -> dict:
-    """Name -> (system, r, start, natural periods) of the work-precision cases."""
+    """Name -> (system, r, start, natural periods) of the work-precision cases (those named in cfg's
+    work_precision_cases, if given)."""
+    return _chosen(_all_work_precision_cases(float(cfg.get("periods", 40))), cfg.get("work_precision_cases"),
+                   "work_precision_cases")
+
+
+def _chosen(cases: dict, chosen, key: str) -> dict:
+    """The cases named (all when None), in their own order; an unknown name refused naming the key."""
+    if chosen is None:
+        return cases
+    unknown = sorted(set(chosen) - set(cases))
+    if unknown:
+        raise ValueError(f"numerics.{key}: unknown case(s) {unknown}; allowed: {list(cases)}")
+    return {name: case for name, case in cases.items() if name in chosen}
+
+
+def _all_work_precision_cases(periods: float) -> dict:
     paper = dict(mu=0.01, beta=0.0048, e=0.25)
-    periods = float(cfg.get("periods", 40))
     return {
         "cid_2eipc": (System.from_gap_ratio("cid", gap_ratio=1.6, **paper), 1.0, "left", periods),
         "cid_irregular": (System.from_gap_ratio("cid", mu=0.01, beta=0.0048, e=0.65, gap_ratio=0.5), 0.97,
@@ -53,6 +71,16 @@ def budget(cfg: dict) -> float:
     return float(cfg.get("budget", DEFAULT_BUDGET))
 
 
+def repeat_below(cfg: dict) -> float:
+    return float(cfg.get("repeat_below", DEFAULT_REPEAT_BELOW))
+
+
+def run_budget(cfg: dict, core_seconds: float) -> float:
+    """The seconds one baseline run may take on a case whose exact-core run takes core_seconds."""
+    factor = cfg.get("budget_over_core", DEFAULT_BUDGET_OVER_CORE)
+    return budget(cfg) if factor is None else min(budget(cfg), float(factor) * core_seconds)
+
+
 def work_precision_pieces(cfg: dict) -> list[tuple[str, str]]:
     """(case, family) of every piece of work of the study."""
     families = {family(m) for m in method_ladders(cfg)}
@@ -62,14 +90,7 @@ def work_precision_pieces(cfg: dict) -> list[tuple[str, str]]:
 def extreme_cases(cfg: dict) -> dict:
     """Name -> (system, r, start) of the stiff and extreme cases (those named in cfg's stability_cases, if
     given)."""
-    cases = _all_extreme_cases()
-    chosen = cfg.get("stability_cases")
-    if chosen is None:
-        return cases
-    unknown = sorted(set(chosen) - set(cases))
-    if unknown:
-        raise ValueError(f"numerics.stability_cases: unknown case(s) {unknown}; allowed: {list(cases)}")
-    return {name: case for name, case in cases.items() if name in chosen}
+    return _chosen(_all_extreme_cases(), cfg.get("stability_cases"), "stability_cases")
 
 
 def _all_extreme_cases() -> dict:

@@ -18,7 +18,7 @@ from impact.stages.numerics.plan import (
     work_precision_cases,
 )
 
-WORK_PRECISION_ATTRS = ("reference", "k_impacts", "wall_time", "repeats", "budget_seconds")
+WORK_PRECISION_ATTRS = ("reference", "k_impacts", "wall_time", "repeats", "budget_seconds", "budget_over_core")
 
 
 def _outcome(out) -> str:

@@ -143,8 +143,13 @@ class Case:
     wall: str
 
     @property
+    def setup(self) -> str:
+        """The ball, clearance and tuning, which every wall of the grid repeats."""
+        return f"mu{self.mu:g}_d{self.gap_mm:g}_rp{self.rp:g}"
+
+    @property
     def id(self) -> str:
-        return f"mu{self.mu:g}_d{self.gap_mm:g}_rp{self.rp:g}_{self.wall}"
+        return f"{self.setup}_{self.wall}"
 
     @classmethod
     def of(cls, obj) -> "Case":
@@ -167,6 +172,18 @@ def all_cases(cfg: dict | None) -> list[Case]:
 def study_cases(cfg: dict, smoke: bool) -> list[Case]:
     """The cases a run covers: the smoke subset, or the whole grid."""
     return [Case.of(c) for c in cfg["smoke"]["cases"]] if smoke else all_cases(cfg)
+
+
+def batches(cases: list[Case]) -> tuple[list[str], list[str]]:
+    """(walls, setups) of the cases, which the workflow runs as one job per wall, each job every setup on its
+    wall: so the cases must be every setup on every wall (the grid is; a smoke subset must be one too)."""
+    walls = list(dict.fromkeys(c.wall for c in cases))
+    setups = list(dict.fromkeys(c.setup for c in cases))
+    missing = sorted({f"{s}_{w}" for s in setups for w in walls} - {c.id for c in cases})
+    if missing:
+        raise ValueError(f"validation cases: the workflow runs one job per wall with every setup (ball, gap, r') "
+                         f"on it, so the cases must be every setup on every wall; missing {', '.join(missing)}")
+    return walls, setups
 
 
 def wall_e(cfg: dict, wall: str) -> float:

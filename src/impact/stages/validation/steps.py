@@ -1,7 +1,7 @@
 """The cross-validation stage's files: one function per step, each reading and writing files only.
 
-The workflow runs each step as its own rule (``workflow/rules/validation.smk``): one job per case
-of the grid (:func:`write_case`), then the grid's tables (:func:`write_grid_tables`), the drop
+The workflow runs each step as its own rule (``workflow/rules/validation.smk``): one job per wall
+material, writing each case of the grid on it (:func:`write_case`), then the grid's tables (:func:`write_grid_tables`), the drop
 tests, the data of Figs. 3 and 5 and the claims; the figures are drawn by :mod:`.figures`, and
 :mod:`.standalone` runs every step in one process, for a quick look outside the workflow.  Every file is written
 atomically, and every file the workflow keeps is one its rules declare.
