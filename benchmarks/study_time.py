@@ -5,7 +5,7 @@ Reads the benchmark file of every job (results/benchmarks/<rule>[/<job>].tsv, wr
 walks the rule graph (`snakemake --rulegraph`) for the longest chain of rules, each weighted by its
 longest job: no number of cores can finish the study faster than that chain.
 
-    python benchmarks/study_time.py [--root .] [--results results] [--configfile config/config.yaml] [--json]
+    python benchmarks/study_time.py [--root .] [--results results] [--configfile config/config.yaml ...] [--json]
 """
 
 from __future__ import annotations
@@ -43,11 +43,11 @@ def rule_stages(rules_dir: Path) -> dict[str, str]:
     return stages
 
 
-def rule_graph(root: Path, configfile: str | None) -> dict[str, set[str]]:
+def rule_graph(root: Path, configfiles: list[str] | None) -> dict[str, set[str]]:
     """{rule: the rules it needs}, from snakemake --rulegraph."""
     cmd = [sys.executable, "-m", "snakemake", "--rulegraph", "--quiet"]
-    if configfile:
-        cmd += ["--configfile", configfile]
+    if configfiles:
+        cmd += ["--configfile", *configfiles]
     dot = subprocess.run(cmd, cwd=root, capture_output=True, text=True, check=True).stdout
     names = dict(re.findall(r"^\s*(\d+)\[label = \"(\w+)\"", dot, flags=re.MULTILINE))
     needs: dict[str, set[str]] = {name: set() for name in names.values()}
@@ -73,7 +73,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--root", default=".", help="the workflow's folder (the repository)")
     ap.add_argument("--results", default="results", help="the study's results folder, under the root")
-    ap.add_argument("--configfile", default=None, help="the configuration the study ran with")
+    ap.add_argument("--configfile", nargs="+", default=None,
+                    help="the configuration files the study ran with (make paper: config/config.yaml config/paper.yaml)")
     ap.add_argument("--json", action="store_true", help="print one JSON object")
     args = ap.parse_args(argv)
     root = Path(args.root)
