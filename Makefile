@@ -9,7 +9,7 @@ BIN    := $(VENV)/bin
 CORES  ?= 2
 STAMP  := $(VENV)/.installed
 # every kernel in numba's cache, for the tests and the command line.  The study does not wait for it: its jobs
-# compile only the kernels they use (make study measured 1,175 s cold, against 357 s of compiling then 1,034 s)
+# compile only the kernels they use (make study measured 1,175 s cold, against 5 to 6 min of compiling then 1,034 s)
 COMPILED := $(VENV)/.compiled
 
 .PHONY: setup study paper test smoke lint docs screenshots bench clean chromium
