@@ -32,7 +32,7 @@ from pathlib import Path
 import pytest
 import xarray as xr
 import yaml
-from reference import copy_workflow
+from reference import HANG_GUARD_S, copy_workflow
 
 ROOT = Path(__file__).resolve().parents[1]
 # CI runs in a fresh clone with shared/ beside the repository
@@ -43,7 +43,6 @@ SMOKE = "config/smoke.yaml"
 NODE_CPUS = "4"
 # dataset attributes that name the moment of the run rather than its content
 RUN_SPECIFIC_ATTRS = {"date_created", "history"}
-RUN_TIMEOUT = 1800
 
 
 def _unavailable(reason: str):
@@ -135,7 +134,7 @@ def _snakemake(work: Path, env: dict, *args: str) -> tuple[float, str, str]:
     proc = subprocess.Popen([*SNAKEMAKE, *args], cwd=work, env=env, text=True,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
-        out, err = proc.communicate(timeout=RUN_TIMEOUT)
+        out, err = proc.communicate(timeout=HANG_GUARD_S)
     except subprocess.TimeoutExpired:
         proc.send_signal(signal.SIGINT)
         try:
@@ -143,7 +142,7 @@ def _snakemake(work: Path, env: dict, *args: str) -> tuple[float, str, str]:
         except subprocess.TimeoutExpired:
             proc.kill()
             out, err = proc.communicate()
-        raise AssertionError(f"snakemake {' '.join(args)} did not finish in {RUN_TIMEOUT} s:\n{err[-4000:]}")
+        raise AssertionError(f"snakemake {' '.join(args)} did not finish in {HANG_GUARD_S} s:\n{err[-4000:]}")
     seconds = time.perf_counter() - t0
     (work / "snakemake.stdout.txt").write_text(out)
     (work / "snakemake.stderr.txt").write_text(err)
