@@ -101,6 +101,10 @@ def _leave_boundary(kap, kpow, c, p, lo, hi, tau_max, escape, delta, out):
     long enough, by direct evaluation.
     """
     edge = hi if escape > 0 else lo
+    # the row meets its state to round-off of its terms, which an ill-conditioned modal basis (a stiff
+    # pendulum beside a soft building) makes larger than delta: a start read beyond the edge must be
+    # travelled back before the clearance counts, or the first step finds the edge it is leaving
+    behind = min(escape * (edge - deriv_at0(kap, c, p, 0)), 0.0)
     h1 = deriv_at0(kap, c, p, 1)
     h2 = deriv_at0(kap, c, p, 2)
     h3 = deriv_at0(kap, c, p, 3)
@@ -119,7 +123,7 @@ def _leave_boundary(kap, kpow, c, p, lo, hi, tau_max, escape, delta, out):
             return -1.0
         steps += 1.0
         pred = escape * (h1 * te + 0.5 * h2 * te * te + h3 * te * te * te / 6.0)
-        if -(pred + m4 * te ** 4 / 24.0) >= delta:
+        if behind - (pred + m4 * te ** 4 / 24.0) >= delta:
             break
         if te > 1e3 * HMIN:
             hb, dhb = eval2(kap, c, p, te)

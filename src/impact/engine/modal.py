@@ -86,6 +86,29 @@ def halve(c, wt):
         c[k] = c[k] * wt[k]
 
 
+@njit(cache=True, inline='always')
+def halve_from_start(kap, c, p, wt):
+    """halve, with p's first two terms taking up what halving moves at tau = 0, so that the half row starts
+    where the full row does.
+
+    The eigenpairs come from a complex eigensolver, so a pair's coefficients are conjugates only to round-off
+    of the basis' condition: in a row of 1e-5 m terms beside a stiff pendulum that is 1e-16 m, a hundred
+    times the contact tolerance.  A contact row that starts off its wall by that much moves each rebound's
+    start off the wall and pumps the bounce; the full row (the state) is the one to start from.
+    """
+    d0 = 0.0
+    d1 = 0.0
+    for k in range(c.shape[0]):
+        ck = c[k]
+        w = wt[k]
+        if w != 1.0:
+            d0 += (1.0 - w) * ck.real
+            d1 += (1.0 - w) * (ck * kap[k]).real
+        c[k] = ck * w
+    p[0] += d0
+    p[1] += d1
+
+
 @njit(cache=True)
 def _reduced_index(s, fidx, nf, units, mode, red):
     """red[i]: the reduced degree of freedom that carries full degree of freedom i (-1: a free CID unit)."""

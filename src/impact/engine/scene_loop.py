@@ -88,6 +88,7 @@ from impact.engine.modal import (
     curvature_bound,
     end_values,
     halve,
+    halve_from_start,
     integrate_modal,
     modal_slot,
     modal_tables,
@@ -114,6 +115,7 @@ from impact.engine.segment import (
 
 EV_NONE, EV_WALL, EV_SLIDE_STOP, EV_RELEASE, EV_FLOOR_EXIT = 0, 1, 2, 3, 4
 _TOL = 1e-12  # contact tolerance, relative to the size of the gap function
+_ROUND_TOL = 1e-13  # 450 eps: the round-off of a difference of rows, relative to their terms' size
 STALL_EVENTS, STALL_SPAN = 1000, 1e-9  # this many events within this fraction of a period: no progress
 
 
@@ -145,10 +147,25 @@ def record_value(record, p, t):
 
 @njit(cache=True, inline='always')
 def _gap_row(C, P, nf, j, f, cs, ps):
+    """Unit j's gap row (its row minus its floor's) into cs, ps; returns the size of the floor row's terms at
+    tau = 0 (|re| + |im| for each mode, within sqrt 2 of its modulus), on which the gap row is rounded."""
+    floor_size = abs(P[f, 0])
     for k in range(C.shape[1]):
-        cs[k] = C[nf + j, k] - C[f, k]
+        cf = C[f, k]
+        cs[k] = C[nf + j, k] - cf
+        floor_size += abs(cf.real) + abs(cf.imag)
     for k in range(NPOLY):
         ps[k] = P[nf + j, k] - P[f, k]
+    return floor_size
+
+
+@njit(cache=True, inline='always')
+def _contact_tol(gap, row_bound, floor_size):
+    """A unit's contact tolerance: _TOL of its gap row's terms and gap, but never below _ROUND_TOL of the
+    unit's and its floor's own rows, since the gap row is their difference and is rounded on their size
+    (a 1e-7 m gap on a floor moving 1e-2 m is resolved to 1e-18 m, not to round-off of 1e-7 m).  The unit's
+    row is at most the floor's plus the gap row's, so the floor's size (from _gap_row) is all it needs."""
+    return max(_TOL * (row_bound + gap), _ROUND_TOL * (2.0 * floor_size + row_bound))
 
 
 @njit(cache=True)
@@ -258,9 +275,9 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
         out[2] = 0.0
         out[3] = 0.0
         if mode[j] == MODE_FREE:
-            _gap_row(C, P, nf, j, f, cs, ps)
-            halve(cs, wt)
-            delta = _TOL * (bound_tab(kpow, cs, ps, 0, 0.0) + ud[j])
+            floor_size = _gap_row(C, P, nf, j, f, cs, ps)
+            halve_from_start(kap, cs, ps, wt)
+            delta = _contact_tol(ud[j], bound_tab(kpow, cs, ps, 0, 0.0), floor_size)
             if escape[j] == 0 and best == ek_tau and _clear_of_walls(kpow, ek, cs, ps, -half, half, best, delta):
                 out[0] = np.inf
                 out[1] = 0.0
@@ -285,7 +302,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
         elif mode[j] == MODE_STUCK:
             stuck_row(kap, C, P, f, side[j], uload[j] * r0, uload[j] * r1,
                       _unit_level(j, units, springs, fric), cq, pq)
-            halve(cq, wt)
+            halve_from_start(kap, cq, pq, wt)
             delta = _TOL * bound_tab(kpow, cq, pq, 0, 0.0)
             q0 = deriv_at0(kap, cq, pq, 0)
             esc = 1 if -q0 < delta else 0
@@ -297,7 +314,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
             if fric is not None:
                 a_f = fric[j]
                 floor_row(kap, C, P, f, uload[j] * r0, uload[j] * r1, cq, pq)
-                halve(cq, wt)
+                halve_from_start(kap, cq, pq, wt)
                 delta = _TOL * (bound_tab(kpow, cq, pq, 0, 0.0) + a_f)
                 q0 = deriv_at0(kap, cq, pq, 0)
                 esc = 0
@@ -587,10 +604,10 @@ def settle(t, model, springs, fric, harm, record, st, scratch, diag):
             f = ufloor[j]
             if check[j] == 1 and mode[j] == MODE_FREE:
                 check[j] = 0
-                _gap_row(C, P, nf, j, f, cs, ps)
+                floor_size = _gap_row(C, P, nf, j, f, cs, ps)
                 push = side[j] * deriv_at0(kap, cs, ps, 2)
                 rebound = v[nf + j] - v[f]
-                tol = _TOL * (bound(kap, cs, ps, 0, 0.0) + ud[j])
+                tol = _contact_tol(ud[j], bound(kap, cs, ps, 0, 0.0), floor_size)
                 if push > 0.0 and rebound * rebound < 2.0 * tol * push:
                     # a rebound whose excursion v^2 / (2 a) cannot clear the contact tolerance
                     plastic_merge(j, building, units, mode, v, diag)

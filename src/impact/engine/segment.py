@@ -387,16 +387,28 @@ def build_segment(s, cache, units, springs, fric, mode, offset, sigma, nf, q, v,
         wc[W + k] = wk
     for i in range(n):
         full = fidx[s, i]
-        for k in range(nt):
-            C[full, k] = 0.0
+        # the row starts exactly at its state: the polynomial, the particular solution's position and velocity,
+        # is taken as what the modes leave of q and v at tau = 0.  Equal in exact arithmetic; but through an
+        # ill-conditioned basis (a pendulum hundreds of times stiffer than its building, identical units) the
+        # modes meet the state only to round-off times the basis' condition, and a unit set on its wall would
+        # start read off it (docs/model.md, "Contact decisions above round-off")
+        h0 = 0.0
+        h1 = 0.0
         for k in range(2 * n):
-            C[full, k] = vec[s, i, k] * wc[W + k]
+            c = vec[s, i, k] * wc[W + k]
+            C[full, k] = c
+            h0 += c.real
+            h1 += c.real * kap[k].real - c.imag * kap[k].imag
+        for k in range(2 * n, nt):
+            C[full, k] = 0.0
         if harmonic:
             ch = zc[s, i] * ph / 2j
             C[full, nt - 2] = ch
             C[full, nt - 1] = ch.conjugate()
-        P[full, 0] = wf[QP + i]
-        P[full, 1] = wf[U1 + i]
+            h0 += 2.0 * ch.real
+            h1 -= 2.0 * omega * ch.imag
+        P[full, 0] = q[full] - h0
+        P[full, 1] = v[full] - h1
         P[full, 2] = 0.0
         P[full, 3] = 0.0
     _copy_identical_rows(units, springs, mode, nf, q, v, C, P)
