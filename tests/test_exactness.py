@@ -89,6 +89,19 @@ def test_a_scene_refuses_what_is_not_a_damper_a_load_or_a_floor():
     assert Damper("cid", mass=1.0, gap=0.1, floor=2.0).floor == 2.0  # a whole number written as a float
 
 
+@pytest.mark.parametrize("value", [2.5, "3", True, math.nan, 0, 61])
+def test_every_count_is_refused_by_name_unless_a_whole_number_in_range(value):
+    """Units, storeys and the event cap go through one check: text, a bool, NaN or a fraction is refused by
+    a ParameterError naming the field and its range, never a TypeError from inside."""
+    with pytest.raises(ParameterError, match=r"units = .* allowed integers \[1, 60\]"):
+        Damper("cid", mass=1.0, gap=0.1, units=value)
+    if value != 61:
+        with pytest.raises(ParameterError, match=r"storeys = .* allowed integers \[1, 200\]"):
+            Building.uniform(value, 1.0, 0.02)
+        with pytest.raises(ParameterError, match=r"max_events_per_period = .* allowed integers >= 10"):
+            Scene(Building.uniform(1, 1.0, 0.02), (), Harmonic(1.0, 6.0), duration=1.0, max_events_per_period=value)
+
+
 def test_a_zero_record_cannot_be_scaled_to_a_pga_and_says_so():
     zero = Record(name="silence", source="test", dt=0.01, accel_g=np.zeros(50))
     with pytest.raises(ParameterError, match="'silence' is zero at every sample"):

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import eigh
 
-from impact.model.params import ParameterError, _check
+from impact.model.params import ParameterError, _check, check_integer
 
 
 def _storey_matrix(k: np.ndarray) -> np.ndarray:
@@ -96,9 +96,7 @@ class Building:
     @classmethod
     def uniform(cls, storeys: int, period_s: float, zeta: float, floor_mass: float = 1.0e5) -> "Building":
         """N equal floors and storeys, stiffness set so that the fundamental period is T1, zeta in every mode."""
-        n = int(storeys)
-        if n != storeys or not 1 <= n <= 200:
-            raise ParameterError(f"storeys = {storeys!r} is out of range: allowed integers [1, 200]")
+        n = check_integer("storeys", storeys, 1, 200)
         _check("period_s", period_s, 0.0, 1e4, lo_open=True)
         _check("zeta", zeta, 0.0, 1.0, lo_open=True, hi_open=True)
         _check("floor_mass", floor_mass, 0.0, 1e15, lo_open=True)

@@ -44,6 +44,16 @@ def _check(name: str, value: float, lo: float, hi: float, *, lo_open=False, hi_o
     return value
 
 
+def check_integer(name: str, value, lo: int, hi: float = math.inf) -> int:
+    """Refuse a value that is not a whole number in [lo, hi] (a bool, text, NaN, 2.5), naming the field."""
+    whole = (not isinstance(value, bool) and isinstance(value, (int, float, np.integer, np.floating))
+             and math.isfinite(value) and int(value) == value)
+    if not whole or not lo <= value <= hi:
+        allowed = f"[{lo}, {hi:g}]" if math.isfinite(hi) else f">= {lo}"
+        raise ParameterError(f"{name} = {value!r} is out of range: allowed integers {allowed}")
+    return int(value)
+
+
 def check_choice(name: str, value, allowed) -> None:
     """Refuse a value that is not one of ``allowed``, naming the field and the choices."""
     if value not in allowed:
@@ -166,8 +176,7 @@ class Protocol:
         _check("periods", self.periods, 0.0, 1e7, lo_open=True)
         _check("average_from", self.average_from, 0.0, self.periods, hi_open=True)
         check_choice("start", self.start, STARTS)
-        if int(self.max_events_per_period) < 10:
-            raise ParameterError("max_events_per_period must be >= 10")
+        check_integer("max_events_per_period", self.max_events_per_period, 10)
 
     @property
     def t_end(self) -> float:

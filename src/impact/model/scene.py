@@ -21,7 +21,16 @@ from dataclasses import KW_ONLY, dataclass
 import numpy as np
 
 from impact.model.building import Building
-from impact.model.params import G_GRAV, MAX_TUNING, STARTS, ParameterError, _check, check_choice, check_fields
+from impact.model.params import (
+    G_GRAV,
+    MAX_TUNING,
+    STARTS,
+    ParameterError,
+    _check,
+    check_choice,
+    check_fields,
+    check_integer,
+)
 
 DAMPER_KINDS = ("cid", "pid", "tmd")
 
@@ -57,8 +66,7 @@ class Damper:
         tuning_floor = "[0" if self.kind == "cid" else "(0"
         check_fields(self, mass="(0, 1e15]", gap="[0, 1e12]", e="[0, 1]", tuning=f"{tuning_floor}, {MAX_TUNING:g}]",
                      damping="[0, 1)", nu="[0, 100]")
-        if int(self.units) != self.units or not 1 <= self.units <= 60:
-            raise ParameterError(f"units = {self.units!r} is out of range: allowed integers [1, 60]")
+        check_integer("units", self.units, 1, 60)
         if self.nu > 0.0 and self.kind != "cid":
             raise ParameterError("nu is only defined for kind 'cid' (only a free mass slides on a floor)")
         if self.kind == "tmd" and self.gap:
@@ -88,11 +96,8 @@ class Harmonic:
 
 def _check_floor(name: str, floor) -> None:
     """A floor is None (the roof) or a whole number from 1; the building's height is checked by the Scene."""
-    if floor is None:
-        return
-    if isinstance(floor, bool) or not isinstance(floor, (int, float, np.integer, np.floating)) \
-            or not math.isfinite(floor) or int(floor) != floor or floor < 1:
-        raise ParameterError(f"{name} = {floor!r} is out of range: allowed None (the roof) or integers from 1")
+    if floor is not None:
+        check_integer(name, floor, 1)
 
 
 def _samples(name: str, values, dt: float) -> np.ndarray:
@@ -208,9 +213,7 @@ class Scene:
         if self.window is not None:
             _check("window", self.window, 0.0, self.t_end, hi_open=True)
         _check("gravity", self.gravity, 0.0, 1e6, lo_open=True)
-        if int(self.max_events_per_period) < 10:
-            raise ParameterError(f"max_events_per_period = {self.max_events_per_period} is out of range: "
-                                 "allowed integers >= 10")
+        check_integer("max_events_per_period", self.max_events_per_period, 10)
         if len(self.unit_list()) > 60:
             raise ParameterError("at most 60 damper units in one scene")
         if self.unit_starts is not None:
