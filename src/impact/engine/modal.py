@@ -92,8 +92,8 @@ def halve_from_start(kap, c, p, wt):
     where the full row does.
 
     The eigenpairs come from a complex eigensolver, so a pair's coefficients are conjugates only to round-off
-    of the basis' condition: in a row of 1e-5 m terms beside a stiff pendulum that is 1e-16 m, a hundred
-    times the contact tolerance.  A contact row that starts off its wall by that much moves each rebound's
+    of the basis' condition: in a row of 1e-5 m terms beside a stiff pendulum that is 1.4e-16 m, more than
+    twice the contact tolerance.  A contact row that starts off its wall by that much moves each rebound's
     start off the wall and pumps the bounce; the full row (the state) is the one to start from.
     """
     d0 = 0.0
