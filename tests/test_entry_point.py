@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -80,3 +81,35 @@ def test_unknown_measures_and_stray_options_are_refused_by_name():
         engine.simulate(scene, measures=("amplitude", "stroke"))
     with pytest.raises(ParameterError, match="record and times"):
         engine.simulate(scene, record=3)
+
+
+def test_the_paper_loop_defines_no_index_of_its_own_and_reads_the_engines_one_layout():
+    """Every parameter, diagnostic, record and mode index the paper loop reads is layout.py's."""
+    import inspect
+
+    from impact.engine import layout, paper_loop
+
+    own = [name for name in vars(paper_loop) if re.fullmatch(r"(P|D|R|MODE)_[A-Z0-9_]+|N(PAR|DIAG|REC)\w*", name)]
+    assert own == [] and paper_loop.L is layout
+    read = set(re.findall(r"\bL\.([A-Z][A-Z0-9_]*)", inspect.getsource(paper_loop)))
+    assert {"P_MU", "P_GAP", "P_PERIOD", "D_X2WIN", "D_CAP", "R_X", "R_IMPULSE", "MODE_STUCK"} <= read
+    assert read <= set(vars(layout))
+
+
+def test_both_loops_report_the_same_diagnostics_and_record_the_same_impacts():
+    """At r = 1, g = 1 the steady state is an attractor (as above), so the two loops' records of the same run
+    agree column by column, and each impact keeps the momentum of structure and damper (M = 1, m = mu)."""
+    system = System.from_gap_ratio("cid", gap_ratio=1.0, **PAPER)
+    proto = Protocol(periods=60.0, average_from=30.0, start="left")
+    fast = paper_simulate(system, 1.0, proto, record=200)
+    full = simulate_scene(paper_scene_from_system(system, 1.0, proto), record=200)
+    assert set(fast.diagnostics) == set(full.diagnostics)
+    assert set(fast.records) == set(full.records)
+    rec, mu = fast.records, system.mu
+    assert len(rec["t"]) > 60 and np.all(rec["unit"] == 0)
+    np.testing.assert_allclose(rec["v_plus"] + mu * rec["w_plus"], rec["v_minus"] + mu * rec["w_minus"],
+                               rtol=0, atol=1e-14)
+    np.testing.assert_allclose(rec["impulse"], rec["side"] * (rec["v_plus"] - rec["v_minus"]), rtol=1e-12)
+    assert np.all(rec["impulse"] > 0.0)
+    for column in ("t", "side", "x", "v_minus", "w_minus", "v_plus", "w_plus", "stuck", "impulse"):
+        np.testing.assert_allclose(full.records[column], rec[column], rtol=1e-9, atol=1e-12, err_msg=column)

@@ -10,7 +10,7 @@ is missed, and integrals over a segment (work, dissipation, the square of a resp
 
 By concern:
 
-- :mod:`.layout`       index constants of the scene loop's arrays
+- :mod:`.layout`       index constants of both loops' arrays (one layout)
 - :mod:`.segment`      closed-form flow: configurations (eigen-data), segments, evaluation, exact integrals
 - :mod:`.events`       the certified contact search and the certified peak search
 - :mod:`.contact`      simultaneous impacts (an LCP on each floor), sticking, release

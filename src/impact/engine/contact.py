@@ -17,11 +17,12 @@ are independent.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
 from impact.engine.layout import MODE_LOCKED
-from impact.engine.segment import bound, deriv_at0
 
 #: relative velocity below which a rebound is treated as sticking, in units of the load's velocity scale
 #: (F0/K * omega for the paper's system); far below any resolved rebound
@@ -97,6 +98,15 @@ def solve_impulses(u, minv, side, e, count, m_floor, impulse):
 
 
 @njit(cache=True)
+def plastic_end(m_unit, w, m_floor, v):
+    """A rebound too slow to resolve ends plastically: the unit (mass m_unit, velocity w) and all that moves
+    with its floor (m_floor, v) take their common velocity, momentum kept.  Returns that velocity and the
+    energy lost."""
+    rel = w - v
+    return (m_floor * v + m_unit * w) / (m_floor + m_unit), 0.5 * m_unit * m_floor / (m_unit + m_floor) * rel * rel
+
+
+@njit(cache=True)
 def stuck_row(kap, C, P, f, side, acc0, acc1, level, cq, pq):
     """Contact-force row of a unit resting on wall `side` of floor f: it stays while q <= 0.
 
@@ -118,13 +128,44 @@ def floor_row(kap, C, P, f, acc0, acc1, cq, pq):
 
 
 @njit(cache=True)
+def derivatives_at0(kap, c, p):
+    """A row's value and first three derivatives at tau = 0 (as segment.deriv_at0 sums them), and beside each
+    the sum of its terms' sizes, the scale a zero test compares it with: two 4-tuples, in one pass.
+
+    The sizes take sqrt(re^2 + im^2) and a running product of |kap|, not abs() and a power: a contact decision
+    runs on every stick and every slide's end, and hypot and pow made them the costliest part of it.
+    """
+    q0 = q1 = q2 = q3 = 0.0
+    s0 = s1 = s2 = s3 = 0.0
+    for k in range(kap.shape[0]):
+        z = c[k]
+        if z.real == 0.0 and z.imag == 0.0:
+            continue
+        kk = kap[k]
+        size = math.sqrt(z.real * z.real + z.imag * z.imag)
+        grow = math.sqrt(kk.real * kk.real + kk.imag * kk.imag)
+        q0 += z.real
+        s0 += size
+        z = z * kk
+        q1 += z.real
+        s1 += size * grow
+        z = z * kk
+        q2 += z.real
+        s2 += size * grow * grow
+        z = z * kk
+        q3 += z.real
+        s3 += size * grow * grow * grow
+    return ((q0 + p[0], q1 + p[1], q2 + 2.0 * p[2], q3 + 6.0 * p[3]),
+            (s0 + abs(p[0]), s1 + abs(p[1]), s2 + 2.0 * abs(p[2]), s3 + 6.0 * abs(p[3])))
+
+
+@njit(cache=True)
 def stays(kap, cq, pq):
     """Whether q <= 0 holds just after tau = 0 (first clearly non-zero derivative)."""
-    for n in range(0, 4):
-        qn = deriv_at0(kap, cq, pq, n)
-        scale = bound(kap, cq, pq, n, 0.0)
-        if abs(qn) > _ZERO_TOL * scale:
-            return qn < 0.0
+    q, scale = derivatives_at0(kap, cq, pq)
+    for n in range(4):
+        if abs(q[n]) > _ZERO_TOL * scale[n]:
+            return q[n] < 0.0
     return True
 
 
@@ -146,7 +187,7 @@ def slide_decision(q, scale, a_f, zero_tol):
     if abs(x2) < a_f - tol:
         return 0
     sgn = 1 if x2 > 0.0 else -1
-    for n in range(1, q.shape[0]):
+    for n in range(1, len(q)):
         if abs(q[n]) > zero_tol * scale[n]:
             return -sgn if sgn * q[n] > 0.0 else 0
     return 0
@@ -155,9 +196,5 @@ def slide_decision(q, scale, a_f, zero_tol):
 @njit(cache=True)
 def floor_decision(kap, cq, pq, a_f):
     """slide_decision for a unit on a floor: sticking needs |x_f'' - a| <= a_f (row cq, pq)."""
-    q = np.empty(4)
-    scale = np.empty(4)
-    for n in range(4):
-        q[n] = deriv_at0(kap, cq, pq, n)
-        scale[n] = bound(kap, cq, pq, n, 0.0)
+    q, scale = derivatives_at0(kap, cq, pq)
     return slide_decision(q, scale, a_f, _ZERO_TOL)

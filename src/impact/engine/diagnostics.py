@@ -1,10 +1,12 @@
 """A run's diagnostics array as named numbers: counters, penetration and the energy balance.
 
-Both loops of the engine write their diagnostics into a float64 vector whose indices their layout module names;
+Both loops of the engine write their diagnostics into a float64 vector whose indices layout.py names;
 :func:`read_diagnostics` turns it into a dict with the same keys for either.
 """
 
 from __future__ import annotations
+
+from impact.engine import layout as L
 
 
 def energy_balance(work: float, viscous: float, impact_losses: float, friction: float, e0: float, e1: float,
@@ -23,27 +25,25 @@ def energy_balance(work: float, viscous: float, impact_losses: float, friction: 
             "friction_work": float(friction)}
 
 
-# A kernel's diagnostics as named numbers: the name, its index's name in the kernel's layout, the type.
-# Each kernel reports the fields its layout defines, so the two kernels share one reader.
+# A loop's diagnostics as named numbers: the name, its index in the layout, the type
 _DIAGNOSTIC_FIELDS = (
-    ("impacts", "D_IMPACTS", int),
-    ("impacts_in_window", "D_IMPACTS_WIN", int),
-    ("simultaneous_impact_events", "D_SIMULTANEOUS", int),
-    ("sticking_episodes", "D_STICKS", int),
-    ("grazing_events", "D_GRAZE", int),
-    ("time_in_contact", "D_STUCKTIME", float),
-    ("segments", "D_SEGMENTS", int),
-    ("search_steps", "D_STEPS", int),
-    ("event_cap_reached", "D_CAP", bool),
-    ("uncertified_peak_segments", "D_PEAK_GAVE_UP", int),
+    ("impacts", L.D_IMPACTS, int),
+    ("impacts_in_window", L.D_IMPACTS_WIN, int),
+    ("simultaneous_impact_events", L.D_SIMULTANEOUS, int),
+    ("sticking_episodes", L.D_STICKS, int),
+    ("grazing_events", L.D_GRAZE, int),
+    ("time_in_contact", L.D_STUCKTIME, float),
+    ("segments", L.D_SEGMENTS, int),
+    ("search_steps", L.D_STEPS, int),
+    ("event_cap_reached", L.D_CAP, bool),
+    ("uncertified_peak_segments", L.D_PEAK_GAVE_UP, int),
 )
 
 
-def read_diagnostics(diag, layout) -> dict:
-    """The counters, the penetration and the energy balance of a kernel's diagnostics array."""
-    out = {name: kind(diag[getattr(layout, index)])
-           for name, index, kind in _DIAGNOSTIC_FIELDS if hasattr(layout, index)}
-    out["max_penetration"] = float(max(diag[layout.D_PEN], 0.0))
-    out.update(energy_balance(diag[layout.D_WORK], diag[layout.D_VISC], diag[layout.D_IMPLOSS],
-                              diag[layout.D_FRICTION], diag[layout.D_E0], diag[layout.D_E1], diag[layout.D_EMAX]))
+def read_diagnostics(diag) -> dict:
+    """The counters, the penetration and the energy balance of a loop's diagnostics array."""
+    out = {name: kind(diag[index]) for name, index, kind in _DIAGNOSTIC_FIELDS}
+    out["max_penetration"] = float(max(diag[L.D_PEN], 0.0))
+    out.update(energy_balance(diag[L.D_WORK], diag[L.D_VISC], diag[L.D_IMPLOSS], diag[L.D_FRICTION],
+                              diag[L.D_E0], diag[L.D_E1], diag[L.D_EMAX]))
     return out

@@ -1,4 +1,10 @@
-"""Index constants of the scene kernels (plain ints: numba folds them)."""
+"""Index constants of the engine's loops, one layout for both (plain ints: numba folds them).
+
+The paper loop (paper_loop.py) runs one damper on one storey, so it reads the same vectors as the scene
+loop, plus the five constants of its system (P_MU .. P_WP) after the scene's parameters; each loop fills
+the diagnostics it has (the paper loop has no monitors and one unit, so no peak search, no simultaneous
+impacts; the scene loop takes its amplitude from its monitors, not from D_X2WIN).
+"""
 
 # unit kinds
 KIND_CID, KIND_PID, KIND_TMD = 0, 1, 2
@@ -14,17 +20,24 @@ P_T0, P_TEND, P_TWIN, P_VSTICK, P_MAXEV, P_PERIOD = 0, 1, 2, 3, 4, 5
 P_OMEGA, P_PHI, P_F0 = 6, 7, 8          # harmonic load F0 sin(Omega t + phi)
 P_REC_T0, P_REC_DT = 9, 10              # record load: first sample time and step
 NPAR = 11
+# the paper loop's system, model units (M = 1, omega_n = 1): mass ratio, damping ratio, restitution, gap,
+# the pendulum's tuning wp (0 for the CID)
+P_MU, P_BETA, P_E, P_GAP, P_WP = range(NPAR, NPAR + 5)
+NPAR_PAPER = NPAR + 5
 
 # diagnostics (float64 vector)
 D_IMPACTS, D_IMPACTS_WIN, D_STICKS, D_GRAZE, D_PEN = 0, 1, 2, 3, 4
 D_WORK, D_VISC, D_IMPLOSS, D_E0, D_E1 = 5, 6, 7, 8, 9
 D_CAP, D_NREC, D_STEPS, D_STUCKTIME, D_TEND = 10, 11, 12, 13, 14
 D_FRICTION, D_SEGMENTS, D_SIMULTANEOUS, D_EMAX, D_PEAK_GAVE_UP = 15, 16, 17, 18, 19
-NDIAG = 20
+D_X2WIN = 20  # the paper loop's integral of x^2 over the window (its amplitude)
+NDIAG = 21
 
-# impact record columns: their names in order, and each one's index
-RECORD_COLUMNS = ("t", "unit", "side", "v_minus", "w_minus", "v_plus", "w_plus", "stuck", "impulse")
-R_T, R_UNIT, R_SIDE, R_V0, R_W0, R_V1, R_W1, R_STUCK, R_IMPULSE = range(len(RECORD_COLUMNS))
+# impact record columns: their names in order, and each one's index.  x: the displacement of the unit's
+# floor; v, w: the floor's and the unit's velocities before (minus) and after (plus); stuck: whether the wall
+# holds the unit after it; impulse: the wall's impulse on the unit (>= 0)
+RECORD_COLUMNS = ("t", "unit", "side", "x", "v_minus", "w_minus", "v_plus", "w_plus", "stuck", "impulse")
+R_T, R_UNIT, R_SIDE, R_X, R_V0, R_W0, R_V1, R_W1, R_STUCK, R_IMPULSE = range(len(RECORD_COLUMNS))
 NREC = len(RECORD_COLUMNS)
 
 # monitor kinds: a linear combination of positions, or of accelerations plus

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from impact.engine import layout as L
 from impact.engine import paper_loop as K
 from impact.engine.contact import STICK_VELOCITY
 from impact.engine.diagnostics import read_diagnostics
@@ -21,7 +22,7 @@ from impact.engine.jitcache import compile_lock
 from impact.model.params import Protocol, System, ipc_class, ipc_label
 
 _WARM: set = set()
-FREE_FLIGHT = K.contact_code(K.MODE_FREE, 0, 0)
+FREE_FLIGHT = K.contact_code(L.MODE_FREE, 0, 0)
 
 
 def ensure_compiled(kind: str, friction: bool = False) -> None:
@@ -68,9 +69,9 @@ def initial_state(system: System, start: str):
     """
     half = 0.5 * system.gap
     if start == "centre" or system.gap == 0.0:
-        return np.zeros(4), K.contact_code(K.MODE_FREE, 0, 0)
+        return np.zeros(4), FREE_FLIGHT
     side = 1 if start == "right" else -1
-    return np.array([0.0, 0.0, side * half, 0.0]), K.contact_code(K.MODE_STUCK, side, 0)
+    return np.array([0.0, 0.0, side * half, 0.0]), K.contact_code(L.MODE_STUCK, side, 0)
 
 
 def check_resonance(system: System, r: float):
@@ -79,27 +80,28 @@ def check_resonance(system: System, r: float):
 
 
 def param_vector(system: System, r: float, protocol: Protocol, t0: float = 0.0) -> np.ndarray:
-    """The paper loop's parameter vector (paper_loop.P_*) of one run under the protocol."""
+    """The paper loop's parameter vector (layout.P_*, NPAR_PAPER of them) of one run under the protocol."""
     return run_parameters(system, r, protocol.t_end, protocol.t_window, protocol.max_events_per_period, t0)
 
 
 def run_parameters(system: System, r: float, t_end: float, t_window: float, max_events_per_period: int,
                    t0: float = 0.0) -> np.ndarray:
     """param_vector with the run's times given (a scene carries them, not a Protocol)."""
-    p = np.zeros(K.NPAR)
-    p[K.P_MU] = system.mu
-    p[K.P_BETA] = system.beta
-    p[K.P_E] = system.e
-    p[K.P_D] = system.gap
-    p[K.P_WP] = system.rp
-    p[K.P_F] = system.force_ratio
-    p[K.P_R] = r
-    p[K.P_PHI] = system.phase
-    p[K.P_VSTICK] = STICK_VELOCITY * system.force_ratio
-    p[K.P_TEND] = t_end
-    p[K.P_TWIN] = t_window
-    p[K.P_MAXEV] = max_events_per_period
-    p[K.P_T0] = t0
+    p = np.zeros(L.NPAR_PAPER)
+    p[L.P_MU] = system.mu
+    p[L.P_BETA] = system.beta
+    p[L.P_E] = system.e
+    p[L.P_GAP] = system.gap
+    p[L.P_WP] = system.rp
+    p[L.P_F0] = system.force_ratio
+    p[L.P_OMEGA] = r
+    p[L.P_PHI] = system.phase
+    p[L.P_VSTICK] = STICK_VELOCITY * system.force_ratio
+    p[L.P_TEND] = t_end
+    p[L.P_TWIN] = t_window
+    p[L.P_MAXEV] = max_events_per_period
+    p[L.P_T0] = t0
+    p[L.P_PERIOD] = 2.0 * math.pi  # the event cap counts per natural period
     return p
 
 
@@ -154,8 +156,8 @@ def friction_data(system: System):
 
 def _run_kernel(system, r, protocol, z0, code, record, t0=0.0) -> "RunResult":
     p = param_vector(system, r, protocol, t0)
-    rec = np.zeros((int(record), K.NREC))
-    diag = np.zeros(K.NDIAG)
+    rec = np.zeros((int(record), L.NREC))
+    diag = np.zeros(L.NDIAG)
     z_out = np.zeros(4)
     final = K.run(p, np.asarray(z0, dtype=float), int(code), pid_data(system, r), friction_data(system),
                   rec, diag, z_out)
@@ -165,19 +167,19 @@ def _run_kernel(system, r, protocol, z0, code, record, t0=0.0) -> "RunResult":
 def window_amplitude(diag, t_window: float) -> tuple[float, float, bool]:
     """(amplitude sqrt(2) RMS of x over the window, the window's span, whether the run completed it) from a
     paper-loop run's diagnostics: the one place this is computed, so every caller gets the same bits."""
-    span = diag[K.D_TEND] - t_window
-    complete = bool(not diag[K.D_CAP] and span > 0)
-    return (math.sqrt(2.0 * diag[K.D_X2WIN] / span) if complete else math.nan), span, complete
+    span = diag[L.D_TEND] - t_window
+    complete = bool(not diag[L.D_CAP] and span > 0)
+    return (math.sqrt(2.0 * diag[L.D_X2WIN] / span) if complete else math.nan), span, complete
 
 
 def _result(system, r, protocol, diag, z_out, final, rec) -> RunResult:
     amp, span, complete = window_amplitude(diag, protocol.t_window)
     cycles = span * r / (2.0 * math.pi)
-    aipc = diag[K.D_IMPACTS_WIN] / cycles if complete else math.nan
+    aipc = diag[L.D_IMPACTS_WIN] / cycles if complete else math.nan
     records = None
     if rec.shape[0]:
-        n = int(diag[K.D_NREC])
-        records = {c: rec[:n, i].copy() for i, c in enumerate(K.RECORD_COLUMNS)}
+        n = int(diag[L.D_NREC])
+        records = {c: rec[:n, i].copy() for i, c in enumerate(L.RECORD_COLUMNS)}
     amax = system.a_max
     return RunResult(
         r=float(r),
@@ -185,7 +187,7 @@ def _result(system, r, protocol, diag, z_out, final, rec) -> RunResult:
         amplitude_ratio=amp / amax if math.isfinite(amax) else math.nan,
         aipc=aipc,
         ipc_class=ipc_class(aipc),
-        diagnostics=read_diagnostics(diag, K),
+        diagnostics=read_diagnostics(diag),
         final_state=z_out.copy(),
         final_contact=int(final),
         records=records,

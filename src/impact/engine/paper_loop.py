@@ -27,6 +27,12 @@ integrated exactly.
 
 The PID's eigen-data arrive as a tuple, the CID's as None: numba prunes the
 branch that does not apply, so a CID run never compiles the pendulum path.
+
+The loop reads the engine's one index layout (layout.py) and shares with the
+scene loop the certified search (events.first_exit), the contact decisions
+(contact.stays, contact.floor_decision) and the row bound (segment.bound_tab);
+what it keeps is the one-unit algebra above, which the scene loop writes for
+any number of units and so rounds differently.
 """
 
 from __future__ import annotations
@@ -36,33 +42,13 @@ import math
 import numpy as np
 from numba import njit
 
-from impact.engine.contact import slide_decision
+from impact.engine import layout as L
+from impact.engine.contact import floor_decision, plastic_end, stays
 from impact.engine.events import first_exit
 from impact.engine.jitcache import ENGINE_CACHE, purge_stale_cache
-from impact.engine.segment import deriv_at0, kappa_powers
+from impact.engine.segment import bound_tab, deriv_at0, kappa_powers
 
 NT = 7  # coefficient slots, see module docstring
-
-MODE_FREE = 0
-MODE_STUCK = 1    # resting against a wall (side = +-1)
-MODE_LOCKED = 2   # d = 0: damper and structure are one body
-MODE_FLOOR = 3    # friction only: stuck to the floor away from the walls
-
-# parameter vector layout (float64 array)
-P_MU, P_BETA, P_E, P_D, P_WP, P_F, P_R, P_PHI = 0, 1, 2, 3, 4, 5, 6, 7
-P_VSTICK, P_TEND, P_TWIN, P_MAXEV, P_T0 = 8, 9, 10, 11, 12
-NPAR = 13
-
-# diagnostics vector layout
-D_IMPACTS, D_IMPACTS_WIN, D_STICKS, D_GRAZE, D_PEN = 0, 1, 2, 3, 4
-D_WORK, D_VISC, D_IMPLOSS, D_E0, D_E1, D_X2WIN = 5, 6, 7, 8, 9, 10
-D_CAP, D_NREC, D_STEPS, D_STUCKTIME, D_TEND = 11, 12, 13, 14, 15
-D_FRICTION, D_EMAX = 16, 17  # D_EMAX: the largest stored energy at a segment's end
-NDIAG = 18
-
-# record columns (stuck: whether the wall holds the mass after the impact)
-RECORD_COLUMNS = ("t", "side", "x", "v_minus", "w_minus", "v_plus", "w_plus", "stuck")
-NREC = len(RECORD_COLUMNS)
 
 # the polynomial part of a row that has none: the segment's deriv_at0 takes one, and the paper loop keeps the
 # ballistic flight's polynomial apart (poly), adding it where a row needs it
@@ -73,27 +59,6 @@ _NO_POLY = np.zeros(4)
 # ----------------------------------------------------------------------------
 # evaluation of coefficient-form functions
 # ----------------------------------------------------------------------------
-
-@njit(cache=True)
-def _bound(kap, c, n):
-    """Bound on |n-th derivative| of the exponential part for tau >= 0.
-
-    Not the segment's bound: that one takes |c| and |kap|^n with hypot and pow, which round differently, and
-    these bounds set the contact tolerances; with it, 3 of 90 runs of CID with friction moved by 4e-16.
-    """
-    acc = 0.0
-    for k in range(NT):
-        ck = c[k]
-        if ck.real != 0.0 or ck.imag != 0.0:
-            term = math.sqrt(ck.real * ck.real + ck.imag * ck.imag)
-            if n > 0:
-                kk = kap[k]
-                size = math.sqrt(kk.real * kk.real + kk.imag * kk.imag)
-                for _ in range(n):
-                    term *= size
-            acc += term
-    return acc
-
 
 @njit(cache=True)
 def flight_state(kap, cx, cy, py1, py2, tau, z):
@@ -163,14 +128,14 @@ def build_free_flight(kap, cx, cy, poly, z0, t0, p, pid, fric, sigma):
     With friction (CID), the mass slides in direction sigma = sign(s') and a
     constant force mu a_f sigma acts on the structure, -a_f sigma on the mass.
     """
-    theta0 = p[P_R] * t0 + p[P_PHI]
+    theta0 = p[L.P_OMEGA] * t0 + p[L.P_PHI]
     if pid is None:
         if fric is None:
-            _oscillator(kap, cx, z0[0], z0[1], 1.0, 2.0 * p[P_BETA], p[P_F], p[P_R], theta0, 0.0)
+            _oscillator(kap, cx, z0[0], z0[1], 1.0, 2.0 * p[L.P_BETA], p[L.P_F0], p[L.P_OMEGA], theta0, 0.0)
             poly[1] = 0.0
         else:
             a_f = fric[0] * sigma
-            _oscillator(kap, cx, z0[0], z0[1], 1.0, 2.0 * p[P_BETA], p[P_F], p[P_R], theta0, p[P_MU] * a_f)
+            _oscillator(kap, cx, z0[0], z0[1], 1.0, 2.0 * p[L.P_BETA], p[L.P_F0], p[L.P_OMEGA], theta0, p[L.P_MU] * a_f)
             poly[1] = -0.5 * a_f
         for k in range(NT):
             cy[k] = 0.0
@@ -189,8 +154,8 @@ def build_free_flight(kap, cx, cy, poly, z0, t0, p, pid, fric, sigma):
             kap[k] = lam[k]
             cx[k] = vec[0, k] * wk
             cy[k] = vec[2, k] * wk
-        kap[4] = 1j * p[P_R]
-        kap[5] = -1j * p[P_R]
+        kap[4] = 1j * p[L.P_OMEGA]
+        kap[5] = -1j * p[L.P_OMEGA]
         kap[6] = 0.0
         cx[4] = zc[0] * ph / 2j
         cx[5] = cx[4].conjugate()
@@ -209,10 +174,10 @@ def _build_combined(kap, cx, cy, poly, z0, t0, p, offset):
     The pendulum spring is internal to the combined body, so CID and PID share
     (1 + mu) x'' + 2 beta x' + x = F0 sin(.); y = x + offset.
     """
-    mu = p[P_MU]
-    theta0 = p[P_R] * t0 + p[P_PHI]
-    _oscillator(kap, cx, z0[0], z0[1], 1.0 / (1.0 + mu), 2.0 * p[P_BETA] / (1.0 + mu),
-                p[P_F] / (1.0 + mu), p[P_R], theta0, 0.0)
+    mu = p[L.P_MU]
+    theta0 = p[L.P_OMEGA] * t0 + p[L.P_PHI]
+    _oscillator(kap, cx, z0[0], z0[1], 1.0 / (1.0 + mu), 2.0 * p[L.P_BETA] / (1.0 + mu),
+                p[L.P_F0] / (1.0 + mu), p[L.P_OMEGA], theta0, 0.0)
     for k in range(NT):
         cy[k] = cx[k]
     cy[6] = cx[6] + offset
@@ -294,8 +259,8 @@ def _int_prod(kap, ca, cb, a, b):
 
 @njit(cache=True)
 def _energy(z, p):
-    mu = p[P_MU]
-    wp = p[P_WP]
+    mu = p[L.P_MU]
+    wp = p[L.P_WP]
     s = z[2] - z[0]
     return 0.5 * (z[1] * z[1] + z[0] * z[0] + mu * z[3] * z[3] + mu * wp * wp * s * s)
 
@@ -305,21 +270,18 @@ def _energy(z, p):
 # ----------------------------------------------------------------------------
 
 @njit(cache=True)
-def _stays_stuck(kap, cx, p, side, a_f):
-    """Whether the wall on `side` keeps holding the damper mass.
+def _stays_stuck(kap, cx, p, side, a_f, cq, pq):
+    """Whether the wall on `side` keeps holding the damper mass (cq, pq: scratch for its contact-force row).
 
     The contact force on the damper is N = mu (x'' + wp^2 side d/2) and the
     wall on `side` can only push inwards; friction (CID) can add up to mu a_f
-    either way: the mass stays while q = side*x'' + wp^2 d/2 - a_f <= 0.
-    Decided on the first derivative of q at 0 that is clearly non-zero.
+    either way: the mass stays while q = side*x'' + wp^2 d/2 - a_f <= 0, which contact.stays decides.
     """
-    base = p[P_WP] ** 2 * 0.5 * p[P_D] - a_f
-    for n in range(2, 6):
-        qn = side * deriv_at0(kap, cx, _NO_POLY, n) + (base if n == 2 else 0.0)
-        scale = _bound(kap, cx, n) + (abs(base) if n == 2 else 0.0)
-        if abs(qn) > 1e-10 * scale:
-            return qn < 0.0
-    return True
+    for k in range(NT):
+        cq[k] = side * cx[k] * kap[k] * kap[k]
+    _poly4(pq, 0.0, 0.0)
+    pq[0] = p[L.P_WP] ** 2 * 0.5 * p[L.P_GAP] - a_f
+    return stays(kap, cq, pq)
 
 
 @njit(cache=True)
@@ -329,17 +291,17 @@ def _apply_impact(z, side, p, diag):
     Returns True when the relative velocity was reset to zero (sticking
     candidate).  Momentum is conserved to round-off; losses are booked.
     """
-    mu = p[P_MU]
-    e = p[P_E]
+    mu = p[L.P_MU]
+    e = p[L.P_E]
     vm = z[1]
     wm = z[3]
     srel = wm - vm
     z[1] = ((1.0 - mu * e) * vm + mu * (1.0 + e) * wm) / (1.0 + mu)
     z[3] = ((1.0 + e) * vm + (mu - e) * wm) / (1.0 + mu)
     red = 0.5 * mu / (1.0 + mu)
-    diag[D_IMPLOSS] += red * (1.0 - e * e) * srel * srel
-    z[2] = z[0] + side * 0.5 * p[P_D]
-    if abs(z[3] - z[1]) < p[P_VSTICK]:
+    diag[L.D_IMPLOSS] += red * (1.0 - e * e) * srel * srel
+    z[2] = z[0] + side * 0.5 * p[L.P_GAP]
+    if abs(z[3] - z[1]) < p[L.P_VSTICK]:
         _stick(z, p, diag)
         return True
     return False
@@ -347,25 +309,21 @@ def _apply_impact(z, side, p, diag):
 
 @njit(cache=True)
 def _stick(z, p, diag):
-    """Perfectly plastic end of a rebound: common velocity, momentum kept, loss booked."""
-    mu = p[P_MU]
-    after = z[3] - z[1]
-    vc = (z[1] + mu * z[3]) / (1.0 + mu)
-    diag[D_IMPLOSS] += 0.5 * mu / (1.0 + mu) * after * after
+    """Perfectly plastic end of a rebound (contact.plastic_end), the loss booked; the structure's mass is 1."""
+    vc, lost = plastic_end(p[L.P_MU], z[3], 1.0, z[1])
+    diag[L.D_IMPLOSS] += lost
     z[1] = vc
     z[3] = vc
 
 
 @njit(cache=True)
-def _floor_decision(kap, cx, a_f):
-    """slide_decision for the paper's damper: the combined body's x'' against a_f (the friction force that
-    drags the mass along is m x'')."""
-    q = np.empty(4)
-    scale = np.empty(4)
-    for n in range(4):
-        q[n] = deriv_at0(kap, cx, _NO_POLY, n + 2)
-        scale[n] = _bound(kap, cx, n + 2)
-    return slide_decision(q, scale, a_f, 1e-10)
+def _floor_decision(kap, cx, a_f, cq, pq):
+    """contact.floor_decision for the paper's damper: the combined body's x'' against a_f (the friction force
+    that drags the mass along is m x''); cq, pq: scratch for that row."""
+    for k in range(NT):
+        cq[k] = cx[k] * kap[k] * kap[k]
+    _poly4(pq, 0.0, 0.0)
+    return floor_decision(kap, cq, pq, a_f)
 
 
 @njit(cache=True)
@@ -392,15 +350,15 @@ encode_contact = njit(cache=True)(contact_code)
 
 @njit(cache=True)
 def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
-    """One run from absolute time p[P_T0] to p[P_TEND].
+    """One run from absolute time p[L.P_T0] to p[L.P_TEND] (p: layout.NPAR_PAPER parameters).
 
     z_init: (x, x', y, y'); code_init: initial contact state (encode_contact).
     pid: PID eigen-data or None (CID); fric: (a_f,) or None (frictionless):
-    None prunes that path at compile time.  rec: (n, NREC) impact records
-    (n may be 0).  diag: NDIAG diagnostics (zeroed here).  z_out: final state.
+    None prunes that path at compile time.  rec: (n, layout.NREC) impact records
+    (n may be 0).  diag: layout.NDIAG diagnostics (zeroed here).  z_out: final state.
     Returns the final contact code, for continuation runs.
     """
-    for i in range(NDIAG):
+    for i in range(L.NDIAG):
         diag[i] = 0.0
     kap = np.zeros(NT, dtype=np.complex128)
     cx = np.zeros(NT, dtype=np.complex128)
@@ -417,13 +375,13 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
     ev = np.zeros(4)
     ev2 = np.zeros(4)
     z = z_init.copy()
-    d = p[P_D]
+    d = p[L.P_GAP]
     half = 0.5 * d
-    t = p[P_T0]
-    t_end = p[P_TEND]
-    t_win = p[P_TWIN]
-    period = 2.0 * math.pi
-    max_ev = p[P_MAXEV]
+    t = p[L.P_T0]
+    t_end = p[L.P_TEND]
+    t_win = p[L.P_TWIN]
+    period = p[L.P_PERIOD]
+    max_ev = p[L.P_MAXEV]
     a_f = 0.0
     if fric is not None:
         a_f = fric[0]
@@ -431,40 +389,40 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
     side = (code_init % 100) // 10 - 1
     mode = code_init % 10
     if d == 0.0:
-        mode = MODE_LOCKED
+        mode = L.MODE_LOCKED
     escape = 0
     escape_v = 0
-    if mode == MODE_FREE and side != 0 and abs(z[2] - z[0]) >= half * (1.0 - 1e-12) and d > 0.0:
+    if mode == L.MODE_FREE and side != 0 and abs(z[2] - z[0]) >= half * (1.0 - 1e-12) and d > 0.0:
         # a state just after an impact on wall `side` (e.g. a closed-form orbit)
         escape = side
     if fric is not None:
-        if mode == MODE_FREE and z[3] == z[1]:
-            mode = MODE_FLOOR
-        elif mode == MODE_FREE and sigma == 0:
+        if mode == L.MODE_FREE and z[3] == z[1]:
+            mode = L.MODE_FLOOR
+        elif mode == L.MODE_FREE and sigma == 0:
             sigma = 1 if z[3] > z[1] else -1
-    diag[D_E0] = _energy(z, p)
-    diag[D_EMAX] = diag[D_E0]
+    diag[L.D_E0] = _energy(z, p)
+    diag[L.D_EMAX] = diag[L.D_E0]
     count_period = 0.0
     period_index = math.floor(t / period)
     nrec = rec.shape[0]
     irec = 0
     while t < t_end:
         tau_max = t_end - t
-        if mode == MODE_FREE:
+        if mode == L.MODE_FREE:
             build_free_flight(kap, cx, cy, poly, z, t, p, pid, fric, sigma)
-        elif mode == MODE_FLOOR:
+        elif mode == L.MODE_FLOOR:
             _build_combined(kap, cx, cy, poly, z, t, p, z[2] - z[0])
             if fric is not None:
-                slide = _floor_decision(kap, cx, a_f)
+                slide = _floor_decision(kap, cx, a_f, cq, pp)
                 if slide != 0:
-                    mode = MODE_FREE
+                    mode = L.MODE_FREE
                     sigma = slide
                     escape_v = -1
                     continue
         else:
-            _build_combined(kap, cx, cy, poly, z, t, p, side * half if mode == MODE_STUCK else 0.0)
-            if mode == MODE_STUCK and not _stays_stuck(kap, cx, p, side, a_f):
-                mode = MODE_FREE
+            _build_combined(kap, cx, cy, poly, z, t, p, side * half if mode == L.MODE_STUCK else 0.0)
+            if mode == L.MODE_STUCK and not _stays_stuck(kap, cx, p, side, a_f, cq, pp):
+                mode = L.MODE_FREE
                 escape = side
                 if fric is not None:
                     sigma = -side
@@ -477,11 +435,11 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
                 kap_powered[:] = kap
         # locate the next event: ev_kind 1 impact/release/floor exit, 2 sliding stops
         ev_kind = 1
-        if mode == MODE_FREE:
+        if mode == L.MODE_FREE:
             for k in range(NT):
                 cs[k] = cy[k] - cx[k]
             _halve(kap, cs)
-            delta = 1e-12 * (_bound(kap, cs, 0) + d)
+            delta = 1e-12 * (bound_tab(kpow, cs, _NO_POLY, 0, 0.0) + d)
             _poly4(pp, poly[0], poly[1])
             first_exit(kap, kpow, cs, pp, -half, half, tau_max, escape, delta, ev)
             if fric is not None:
@@ -489,31 +447,31 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
                 for k in range(NT):
                     cq[k] = sigma * cs[k] * kap[k]
                 cq[6] += sigma * poly[0]
-                dv = 1e-12 * (_bound(kap, cq, 0) + 2.0 * abs(poly[1]))
+                dv = 1e-12 * (bound_tab(kpow, cq, _NO_POLY, 0, 0.0) + 2.0 * abs(poly[1]))
                 _poly4(pp, 2.0 * sigma * poly[1], 0.0)
                 first_exit(kap, kpow, cq, pp, 0.0, np.inf, min(ev[0], tau_max), escape_v, dv, ev2)
-                diag[D_STEPS] += ev2[3]
+                diag[L.D_STEPS] += ev2[3]
                 if ev2[0] < ev[0]:
                     ev[0] = ev2[0]
                     ev[1] = 0.0
                     ev_kind = 2
-        elif mode == MODE_STUCK:
+        elif mode == L.MODE_STUCK:
             for k in range(NT):
                 cq[k] = side * cx[k] * kap[k] * kap[k]
             _halve(kap, cq)
-            level = -p[P_WP] ** 2 * half + a_f
-            delta = 1e-12 * (_bound(kap, cq, 0) + abs(level))
+            level = -p[L.P_WP] ** 2 * half + a_f
+            delta = 1e-12 * (bound_tab(kpow, cq, _NO_POLY, 0, 0.0) + abs(level))
             # just stuck with the contact force at round-off from its limit: the
             # force is known to move away from it (see _stays_stuck)
             q0 = deriv_at0(kap, cq, _NO_POLY, 0)
             esc = 1 if level - q0 < delta else 0
             _poly4(pp, 0.0, 0.0)
             first_exit(kap, kpow, cq, pp, -np.inf, level, tau_max, esc, delta, ev)
-        elif mode == MODE_FLOOR:
+        elif mode == L.MODE_FLOOR:
             for k in range(NT):
                 cq[k] = cx[k] * kap[k] * kap[k]
             _halve(kap, cq)
-            delta = 1e-12 * (_bound(kap, cq, 0) + a_f)
+            delta = 1e-12 * (bound_tab(kpow, cq, _NO_POLY, 0, 0.0) + a_f)
             q0 = deriv_at0(kap, cq, _NO_POLY, 0)
             esc = 0
             if a_f - abs(q0) < delta:
@@ -526,35 +484,36 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
             ev[2] = 0.0
             ev[3] = 0.0
         tau = min(ev[0], tau_max)
-        diag[D_GRAZE] += ev[2]
-        diag[D_STEPS] += ev[3]
+        diag[L.D_SEGMENTS] += 1.0
+        diag[L.D_GRAZE] += ev[2]
+        diag[L.D_STEPS] += ev[3]
         # exact integrals over the segment
-        theta0 = p[P_R] * t + p[P_PHI]
-        cf[4] = p[P_F] * np.exp(1j * theta0) / 2j
+        theta0 = p[L.P_OMEGA] * t + p[L.P_PHI]
+        cf[4] = p[L.P_F0] * np.exp(1j * theta0) / 2j
         cf[5] = cf[4].conjugate()
         for k in range(NT):
             if k > 0 and kap[k] == kap[k - 1].conjugate():
                 eh[k] = eh[k - 1].conjugate()  # exp(conj(z)) = conj(exp(z)): one exponential per pair
             else:
                 eh[k] = np.exp(kap[k] * tau)
-        diag[D_WORK] += _int_prod0(kap, eh, cf, cv, tau)
-        diag[D_VISC] += 2.0 * p[P_BETA] * _int_prod0(kap, eh, cv, cv, tau)
+        diag[L.D_WORK] += _int_prod0(kap, eh, cf, cv, tau)
+        diag[L.D_VISC] += 2.0 * p[L.P_BETA] * _int_prod0(kap, eh, cv, cv, tau)
         if t + tau > t_win:
             if t >= t_win:
-                diag[D_X2WIN] += _int_prod0(kap, eh, cx, cx, tau)
+                diag[L.D_X2WIN] += _int_prod0(kap, eh, cx, cx, tau)
             else:
-                diag[D_X2WIN] += _int_prod(kap, cx, cx, t_win - t, tau)
-        if mode != MODE_FREE:
-            diag[D_STUCKTIME] += tau
+                diag[L.D_X2WIN] += _int_prod(kap, cx, cx, t_win - t, tau)
+        if mode != L.MODE_FREE:
+            diag[L.D_STUCKTIME] += tau
         s_start = z[2] - z[0]
         _state_from(kap, eh, cx, cy, poly[0], poly[1], tau, z)
         e_now = _energy(z, p)
-        if e_now > diag[D_EMAX]:
-            diag[D_EMAX] = e_now
+        if e_now > diag[L.D_EMAX]:
+            diag[L.D_EMAX] = e_now
         if fric is not None:
-            if mode == MODE_FREE:
+            if mode == L.MODE_FREE:
                 # s' keeps its sign on a sliding segment: the work is exact
-                diag[D_FRICTION] += p[P_MU] * a_f * sigma * (z[2] - z[0] - s_start)
+                diag[L.D_FRICTION] += p[L.P_MU] * a_f * sigma * (z[2] - z[0] - s_start)
         t = t + tau
         escape = 0
         escape_v = 0
@@ -567,25 +526,25 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
             count_period = 0.0
         count_period += 1.0
         if count_period > max_ev:
-            diag[D_CAP] = 1.0
+            diag[L.D_CAP] = 1.0
             break
         ev_side = int(ev[1])
         if fric is not None:
             if ev_kind == 2:
                 # the slide ends: the floor holds the mass or it slides back
                 z[3] = z[1]
-                mode = MODE_FLOOR
+                mode = L.MODE_FLOOR
                 continue
-            if mode == MODE_FLOOR:
+            if mode == L.MODE_FLOOR:
                 # the floor can no longer drag the mass along: it slides
                 z[3] = z[1]
-                mode = MODE_FREE
+                mode = L.MODE_FREE
                 sigma = -ev_side
                 escape_v = -1
                 continue
-        if mode == MODE_STUCK:
+        if mode == L.MODE_STUCK:
             # release: the wall stops holding the mass, which leaves with s' = 0
-            mode = MODE_FREE
+            mode = L.MODE_FREE
             z[2] = z[0] + side * half
             z[3] = z[1]
             escape = side
@@ -596,8 +555,8 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
         # impact on wall ev_side
         s_now = z[2] - z[0]
         pen = abs(s_now) - half
-        if pen > diag[D_PEN]:
-            diag[D_PEN] = pen
+        if pen > diag[L.D_PEN]:
+            diag[L.D_PEN] = pen
         approach = ev_side * (z[3] - z[1])
         vm = z[1]
         wm = z[3]
@@ -606,9 +565,9 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
             z[2] = z[0] + ev_side * half
             escape = ev_side
             continue
-        diag[D_IMPACTS] += 1.0
+        diag[L.D_IMPACTS] += 1.0
         if t >= t_win:
-            diag[D_IMPACTS_WIN] += 1.0
+            diag[L.D_IMPACTS_WIN] += 1.0
         stuck = _apply_impact(z, ev_side, p, diag)
         side = ev_side
         if fric is not None:
@@ -621,37 +580,39 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
                 cs[k] = cy[k] - cx[k]
             push = side * (deriv_at0(kap, cs, _NO_POLY, 2) + 2.0 * poly[1])
             rebound = z[3] - z[1]
-            tol = 1e-12 * (_bound(kap, cs, 0) + d)
+            tol = 1e-12 * (bound_tab(kpow, cs, _NO_POLY, 0, 0.0) + d)
             if push > 0.0 and rebound * rebound < 2.0 * tol * push:
                 _stick(z, p, diag)
                 stuck = True
         if stuck:
             # decide whether the wall holds the mass
             _build_combined(kap, cx, cy, poly, z, t, p, side * half)
-            if _stays_stuck(kap, cx, p, side, a_f):
-                mode = MODE_STUCK
-                diag[D_STICKS] += 1.0
+            if _stays_stuck(kap, cx, p, side, a_f, cq, pp):
+                mode = L.MODE_STUCK
+                diag[L.D_STICKS] += 1.0
             else:
-                mode = MODE_FREE
+                mode = L.MODE_FREE
                 escape = side
                 if fric is not None:
                     escape_v = -1
         else:
-            mode = MODE_FREE
+            mode = L.MODE_FREE
             escape = side
         if irec < nrec:
-            rec[irec, 0] = t
-            rec[irec, 1] = side
-            rec[irec, 2] = z[0]
-            rec[irec, 3] = vm
-            rec[irec, 4] = wm
-            rec[irec, 5] = z[1]
-            rec[irec, 6] = z[3]
-            rec[irec, 7] = 1.0 if mode == MODE_STUCK else 0.0
+            rec[irec, L.R_T] = t
+            rec[irec, L.R_UNIT] = 0.0
+            rec[irec, L.R_SIDE] = side
+            rec[irec, L.R_X] = z[0]
+            rec[irec, L.R_V0] = vm
+            rec[irec, L.R_W0] = wm
+            rec[irec, L.R_V1] = z[1]
+            rec[irec, L.R_W1] = z[3]
+            rec[irec, L.R_STUCK] = 1.0 if mode == L.MODE_STUCK else 0.0
+            rec[irec, L.R_IMPULSE] = side * p[L.P_MU] * (wm - z[3])
             irec += 1
-    diag[D_E1] = _energy(z, p)
-    diag[D_NREC] = irec
-    diag[D_TEND] = t
+    diag[L.D_E1] = _energy(z, p)
+    diag[L.D_NREC] = irec
+    diag[L.D_TEND] = t
     for i in range(4):
         z_out[i] = z[i]
     return encode_contact(mode, side, sigma)

@@ -18,6 +18,7 @@ from typing import Callable
 
 import numpy as np
 
+from impact.engine import layout as L
 from impact.engine import paper
 from impact.engine import paper_loop as K
 from impact.engine.diagnostics import read_diagnostics
@@ -76,16 +77,16 @@ def _run_paper(scene: Scene, measures: frozenset, record: int, times) -> SceneRe
     p = paper.run_parameters(system, r, scene.t_end, scene.t_window, scene.max_events_per_period)
     fric = np.array([system.nu * scene.gravity]) if system.nu > 0.0 else None
     paper.ensure_compiled(system.kind, fric is not None)
-    diag = np.zeros(K.NDIAG)
+    diag = np.zeros(L.NDIAG)
     z_out = np.zeros(4)
-    K.run(p, z0, int(code), paper.pid_data(system, r), fric, np.zeros((0, K.NREC)), diag, z_out)
+    K.run(p, z0, int(code), paper.pid_data(system, r), fric, np.zeros((0, L.NREC)), diag, z_out)
     amp, span, complete = paper.window_amplitude(diag, scene.t_window)
     nan = math.nan
     return SceneResult(
         scene=scene, peak_roof_displacement=nan, peak_roof_displacement_time=nan,
-        rms_roof_displacement=math.sqrt(diag[K.D_X2WIN] / span) if complete else nan,
+        rms_roof_displacement=math.sqrt(diag[L.D_X2WIN] / span) if complete else nan,
         peak_roof_acceleration=nan, peak_interstorey_drift=nan, peak_drifts=np.full(1, nan),
-        peak_strokes=np.full(1, nan), impacts=int(diag[K.D_IMPACTS]), diagnostics=read_diagnostics(diag, K),
+        peak_strokes=np.full(1, nan), impacts=int(diag[L.D_IMPACTS]), diagnostics=read_diagnostics(diag),
         final_q=z_out[[0, 2]].copy(), final_v=z_out[[1, 3]].copy(), amplitude=amp, window_span=float(span),
         loop="paper")
 

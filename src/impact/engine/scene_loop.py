@@ -31,7 +31,7 @@ from impact.engine.bundles import (
     Vectors,
     Workspace,
 )
-from impact.engine.contact import floor_decision, floor_mass, floor_row, solve_impulses, stays, stuck_row
+from impact.engine.contact import floor_decision, floor_mass, floor_row, plastic_end, solve_impulses, stays, stuck_row
 from impact.engine.events import PEAK_RTOL, first_exit, peak_abs
 from impact.engine.jitcache import ENGINE_CACHE, purge_stale_cache
 from impact.engine.layout import (
@@ -82,6 +82,7 @@ from impact.engine.layout import (
     R_V1,
     R_W0,
     R_W1,
+    R_X,
 )
 from impact.engine.modal import (
     amplitude_moduli,
@@ -560,9 +561,8 @@ def plastic_merge(j, building, units, mode, v, diag):
     for l in range(um.shape[0]):
         if l != j and ufloor[l] == f and mode[l] == MODE_STUCK:
             mf += um[l]
-    rel = v[nf + j] - v[f]
-    diag[D_IMPLOSS] += 0.5 * um[j] * mf / (um[j] + mf) * rel * rel
-    vc = (mf * v[f] + um[j] * v[nf + j]) / (mf + um[j])
+    vc, lost = plastic_end(um[j], v[nf + j], mf, v[f])
+    diag[D_IMPLOSS] += lost
     v[f] = vc
     v[nf + j] = vc
     for l in range(um.shape[0]):
@@ -646,7 +646,7 @@ def settle(t, model, springs, fric, harm, record, st, scratch, diag):
 def _record_impacts(t, units, st, events, v_before, recs, diag):
     """Append a record (layout.R_*) of every unit that hit a wall at t while recs has room (count: diag[D_NREC])."""
     ufloor = units.floor
-    mode, v = st.mode, st.v
+    mode, q, v = st.mode, st.q, st.v
     hit, ev_side, impulse = events.hit, events.side, events.impulse
     nf = v.shape[0] - ufloor.shape[0]
     irec = int(diag[D_NREC])
@@ -656,6 +656,7 @@ def _record_impacts(t, units, st, events, v_before, recs, diag):
             recs[irec, R_T] = t
             recs[irec, R_UNIT] = j
             recs[irec, R_SIDE] = ev_side[j]
+            recs[irec, R_X] = q[f]
             recs[irec, R_V0] = v_before[f]
             recs[irec, R_W0] = v_before[nf + j]
             recs[irec, R_V1] = v[f]

@@ -291,7 +291,7 @@ def _result(scene: Scene, arrays: dict, out: dict) -> SceneResult:
         peak_drifts=peaks[2:2 + nf].copy(),
         peak_strokes=peaks[2 + nf:].copy(),
         impacts=int(diag[L.D_IMPACTS]),
-        diagnostics=read_diagnostics(diag, L),
+        diagnostics=read_diagnostics(diag),
         final_q=out["q"].copy(),
         final_v=out["v"].copy(),
         records=records,

@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from impact.engine import layout as L
 from impact.engine import paper_loop as K
 from impact.engine.paper import sweep
 from impact.model.params import Protocol, System, curve_id
@@ -49,10 +50,10 @@ def member_state(system: System, member) -> tuple[np.ndarray, int]:
     half = 0.5 * system.gap
     if member["velocity"] == 0.0 and abs(member["place"]) == 1.0 and system.gap > 0:
         side = int(member["place"])
-        return np.array([0.0, 0.0, side * half, 0.0]), K.contact_code(K.MODE_STUCK, side, 0)
+        return np.array([0.0, 0.0, side * half, 0.0]), K.contact_code(L.MODE_STUCK, side, 0)
     x0 = member["structure"] * system.a_max
     state = np.array([x0, 0.0, x0 + member["place"] * half, member["velocity"] * system.a_max])
-    return state, K.contact_code(K.MODE_FREE, 0, 0)
+    return state, K.contact_code(L.MODE_FREE, 0, 0)
 
 
 def count_attractors(amplitude: np.ndarray, aipc: np.ndarray) -> int:

@@ -20,13 +20,14 @@ import pandas as pd
 import xarray as xr
 
 from impact.closed_form.masri import BRANCHES, masri_2eipc, orbit_initial_state, orbit_rms_amplitude
+from impact.engine import layout as L
 from impact.engine import paper_loop as K
 from impact.engine.paper import simulate
 from impact.model.params import Protocol, System, a_max, frequency_grid
 from impact.outputs.files import as_integers, flag
 from impact.stages.masri.charts import branches
 
-JUST_AFTER_RIGHT_IMPACT = K.contact_code(K.MODE_FREE, 1, 0)
+JUST_AFTER_RIGHT_IMPACT = K.contact_code(L.MODE_FREE, 1, 0)
 LANDING_TOLERANCE = 1e-3
 
 

@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import fcntl
 import math
+from collections import namedtuple
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numba import njit
 
+from impact.engine import layout as L
 from impact.engine import paper_loop as K
 from impact.engine.contact import STICK_VELOCITY
 from impact.engine.jitcache import _cache_dir, purge_stale_cache
@@ -27,6 +29,11 @@ from impact.model.params import Protocol, System
 from impact.stages.validation import rig as R
 from impact.stages.validation.grid import Case, validation_config, wall_e
 from impact.stages.validation.measurements import Measurement, make_measurement
+
+# one call of the paper loop: its parameters, the PID's eigen-data, and where it writes (records, diagnostics,
+# the final state); and the sample times with the arrays they fill (x and the stroke s = y - x)
+PaperCall = namedtuple("PaperCall", "p pid rec diag z_out")
+Samples = namedtuple("Samples", "ts xs ss")
 
 MODEL_SOURCE = ("model: Eq. (4) of the paper (linear pendulum, instantaneous impacts) simulated by the "
                 "production exact event-driven kernel impact.engine.paper_loop.run; synthetic")
@@ -41,7 +48,7 @@ def model_system(cfg: dict, case: Case) -> System:
 
 
 @njit(cache=True)
-def _model_chunk_dense(p, z, code, pid, ta, tb, ts, i0, i1, xs, ss, rec, diag, zo):
+def _model_chunk_dense(call, z, code, ta, tb, samples, i0, i1):
     """One call of the production kernel over [ta, tb]; samples ts[i0:i1] in (ta, tb] rebuilt from its events.
 
     Between impacts the kernel's motion is the closed-form free flight from
@@ -51,14 +58,16 @@ def _model_chunk_dense(p, z, code, pid, ta, tb, ts, i0, i1, xs, ss, rec, diag, z
     more impacts than ``rec`` holds -- then the caller re-runs it sample by
     sample.
     """
-    p[K.P_T0] = ta
-    p[K.P_TEND] = tb
-    code_new = K.run(p, z, code, pid, None, rec, diag, zo)
-    nr = int(diag[K.D_NREC])
-    if code % 10 != K.MODE_FREE or nr >= rec.shape[0] or diag[K.D_CAP] > 0.0:
+    p, pid, rec, diag = call.p, call.pid, call.rec, call.diag
+    ts, xs, ss = samples
+    p[L.P_T0] = ta
+    p[L.P_TEND] = tb
+    code_new = K.run(p, z, code, pid, None, rec, diag, call.z_out)
+    nr = int(diag[L.D_NREC])
+    if code % 10 != L.MODE_FREE or nr >= rec.shape[0] or diag[L.D_CAP] > 0.0:
         return code_new, False
     for j in range(nr):
-        if rec[j, 7] > 0.0:
+        if rec[j, L.R_STUCK] > 0.0:
             return code_new, False
     kap = np.zeros(K.NT, dtype=np.complex128)
     cx = np.zeros(K.NT, dtype=np.complex128)
@@ -67,17 +76,17 @@ def _model_chunk_dense(p, z, code, pid, ta, tb, ts, i0, i1, xs, ss, rec, diag, z
     zs = z.copy()
     zt = np.zeros(4)
     t_seg = ta
-    half = 0.5 * p[K.P_D]
+    half = 0.5 * p[L.P_GAP]
     j = 0
     paper_free_flight(kap, cx, cy, poly, zs, t_seg, p, pid)
     for i in range(i0, i1):
-        while j < nr and rec[j, 0] <= ts[i]:
-            side = rec[j, 1]
-            zs[0] = rec[j, 2]
-            zs[1] = rec[j, 5]
-            zs[2] = rec[j, 2] + side * half
-            zs[3] = rec[j, 6]
-            t_seg = rec[j, 0]
+        while j < nr and rec[j, L.R_T] <= ts[i]:
+            side = rec[j, L.R_SIDE]
+            zs[0] = rec[j, L.R_X]
+            zs[1] = rec[j, L.R_V1]
+            zs[2] = rec[j, L.R_X] + side * half
+            zs[3] = rec[j, L.R_W1]
+            t_seg = rec[j, L.R_T]
             paper_free_flight(kap, cx, cy, poly, zs, t_seg, p, pid)
             j += 1
         paper_state(kap, cx, cy, poly, ts[i] - t_seg, zt)
@@ -87,30 +96,31 @@ def _model_chunk_dense(p, z, code, pid, ta, tb, ts, i0, i1, xs, ss, rec, diag, z
 
 
 @njit(cache=True)
-def _advance(p, z, code, pid, ta, tb, rec, diag, zo):
+def _advance(call, z, code, ta, tb):
     """One kernel call from ta to tb, the state moved to tb; returns (contact code, capped)."""
-    p[K.P_T0] = ta
-    p[K.P_TEND] = tb
-    code = K.run(p, z, code, pid, None, rec, diag, zo)
-    capped = diag[K.D_CAP] > 0.0 or diag[K.D_TEND] < tb
+    p, diag = call.p, call.diag
+    p[L.P_T0] = ta
+    p[L.P_TEND] = tb
+    code = K.run(p, z, code, call.pid, None, call.rec, diag, call.z_out)
+    capped = diag[L.D_CAP] > 0.0 or diag[L.D_TEND] < tb
     for k in range(4):
-        z[k] = zo[k]
+        z[k] = call.z_out[k]
     return code, capped
 
 
 @njit(cache=True)
 def _keep_impacts(rec, diag, imp, nimp):
     """Append the call's impact records (time, wall) to imp while it has room; returns the new count."""
-    for j in range(int(diag[K.D_NREC])):
+    for j in range(int(diag[L.D_NREC])):
         if nimp < imp.shape[0]:
-            imp[nimp, 0] = rec[j, 0]
-            imp[nimp, 1] = rec[j, 1]
+            imp[nimp, 0] = rec[j, L.R_T]
+            imp[nimp, 1] = rec[j, L.R_SIDE]
         nimp += 1
     return nimp
 
 
 @njit(cache=True)
-def _model_samples(p, z0, code0, pid, t0, ts, xs, ss, imp, out, chunk):
+def _model_samples(call, z0, code0, t0, samples, imp, out, chunk):
     """Run the production kernel from t0 through the sample times ts (model units).
 
     The kernel runs over chunks of ``chunk`` samples; inside a chunk the
@@ -120,10 +130,9 @@ def _model_samples(p, z0, code0, pid, t0, ts, xs, ss, imp, out, chunk):
     sample; impact times and walls into imp; out = (impacts, event cap
     reached, final contact code).
     """
-    rec = np.zeros((512, K.NREC))
-    diag = np.zeros(K.NDIAG)
+    rec, diag, zo = call.rec, call.diag, call.z_out
+    ts, xs, ss = samples
     z = z0.copy()
-    zo = np.zeros(4)
     code = code0
     t = t0
     nimp = 0
@@ -137,7 +146,7 @@ def _model_samples(p, z0, code0, pid, t0, ts, xs, ss, imp, out, chunk):
         i += 1
     if i < n and ts[i] > t:
         # settle: one call up to the first sample
-        code, capped = _advance(p, z, code, pid, t, ts[i], rec, diag, zo)
+        code, capped = _advance(call, z, code, t, ts[i])
         if capped:
             cap = 1.0
         t = ts[i]
@@ -147,7 +156,7 @@ def _model_samples(p, z0, code0, pid, t0, ts, xs, ss, imp, out, chunk):
     while i < n:
         i1 = min(i + chunk, n)
         tb = ts[i1 - 1]
-        code_new, ok = _model_chunk_dense(p, z, code, pid, t, tb, ts, i, i1, xs, ss, rec, diag, zo)
+        code_new, ok = _model_chunk_dense(call, z, code, t, tb, samples, i, i1)
         if ok:
             nimp = _keep_impacts(rec, diag, imp, nimp)
             code = code_new
@@ -158,7 +167,7 @@ def _model_samples(p, z0, code0, pid, t0, ts, xs, ss, imp, out, chunk):
             # sample by sample from the chunk's start
             for ii in range(i, i1):
                 if ts[ii] > t:
-                    code, capped = _advance(p, z, code, pid, t, ts[ii], rec, diag, zo)
+                    code, capped = _advance(call, z, code, t, ts[ii])
                     nimp = _keep_impacts(rec, diag, imp, nimp)
                     if capped:
                         cap = 1.0
@@ -187,17 +196,17 @@ def _run_model(cfg: dict, case: Case, r: float, ts_s: np.ndarray, *, forced: boo
     omega = 2.0 * math.pi * float(cfg["structure"]["frequency_hz"])
     prot = Protocol(periods=1.0, average_from=0.0)
     p = model_param_vector(system, r, prot)
-    p[K.P_TWIN] = 0.0
+    p[L.P_TWIN] = 0.0
     data = pid_data(system, r)
     if forced:
         z0, code = initial_state(system, "centre")
     else:
         lam, vec, vinv, zc = data
         data = (lam, vec, vinv, np.zeros_like(zc))
-        p[K.P_F] = 0.0
-        p[K.P_VSTICK] = STICK_VELOCITY * max(abs(x0_mm), 1e-6)
+        p[L.P_F0] = 0.0
+        p[L.P_VSTICK] = STICK_VELOCITY * max(abs(x0_mm), 1e-6)
         z0 = np.array([x0_mm, 0.0, x0_mm, 0.0])
-        code = K.contact_code(K.MODE_FREE, 0, 0)
+        code = K.contact_code(L.MODE_FREE, 0, 0)
     tm = np.ascontiguousarray(ts_s * omega)
     xs = np.empty(tm.size)
     ss = np.empty(tm.size)
@@ -207,7 +216,8 @@ def _run_model(cfg: dict, case: Case, r: float, ts_s: np.ndarray, *, forced: boo
     if chunk is None:
         per_cycle = float(cfg["sensor"]["sample_rate_hz"]) / (r * float(cfg["structure"]["frequency_hz"]))
         chunk = max(1, int(round(per_cycle)))
-    _model_samples(p, np.asarray(z0, dtype=float), int(code), data, 0.0, tm, xs, ss, imp, out, chunk)
+    call = PaperCall(p, data, np.zeros((512, L.NREC)), np.zeros(L.NDIAG), np.zeros(4))
+    _model_samples(call, np.asarray(z0, dtype=float), int(code), 0.0, Samples(tm, xs, ss), imp, out, chunk)
     n = int(min(out[0], imp.shape[0]))
     return ModelRun(ts_s, xs, ss, imp[:n, 0] / omega, bool(out[1]))
 
