@@ -122,7 +122,7 @@ def collect(bare: dict, dampers: dict) -> dict:
         if not per_building:
             continue
         ds = xr.merge([xr.concat(per_building, dim="building", join="outer", coords="minimal", data_vars="all"),
-                       xr.concat(bare_parts, dim="building")]).assign_coords(building=names)
+                       xr.concat(bare_parts, dim="building")], compat="no_conflicts").assign_coords(building=names)
         for name in ds.data_vars:
             if name.startswith("bare_"):
                 ds[name].attrs = dict(bare[names[0]][f"{family}_{name.removeprefix('bare_')}"].attrs)
