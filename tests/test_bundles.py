@@ -1,9 +1,8 @@
 """The package's compiled functions take named bundles (impact.engine.bundles), not dozens of positional arrays.
 
-The steps inlined on every segment of a scene run are the exception, and they are named here: handing them
-bundles cost 8 to 31 % of a run (docs/architecture.md, "How the scene loop's arrays travel").  A new compiled
-function with more than ten parameters fails this test until it takes bundles or joins that list with a
-measurement behind it.
+The steps inlined on every segment of a scene run take one numba structref (bundles.SegmentWork): a namedtuple
+of arrays there cost 8 to 31 % of a run, the structref nothing measurable (docs/architecture.md, "How the scene
+loop's arrays travel").  Every compiled function of the package takes ten parameters or fewer.
 """
 
 from __future__ import annotations
@@ -21,12 +20,6 @@ PACKAGE = Path(impact.__file__).parent
 ENGINE = Path(impact.engine.__file__).parent
 MOST_PARAMETERS = 10
 
-# inlined on every segment, where each array of the arguments costs a reference count
-PER_SEGMENT_STEPS = {
-    "build_segment", "search_events", "integrate_segment", "integrate_energy", "integrate_modal",
-    "monitor_modal", "monitor_row", "curvature_bound", "window_square", "move_to_end", "_same_unit_state",
-}
-
 
 def compiled_functions(folder: Path):
     """(file path below folder, function name, number of parameters, inlined) of every @njit function there."""
@@ -37,19 +30,28 @@ def compiled_functions(folder: Path):
                     " ".join(ast.unparse(d) for d in node.decorator_list)
 
 
-def test_compiled_functions_take_at_most_ten_parameters_but_the_engines_per_segment_steps():
+def test_every_compiled_function_takes_at_most_ten_parameters():
     found = list(compiled_functions(PACKAGE))
     assert {f.split("/")[0] for f, *_ in found} >= {"engine", "stages"}  # the walk sees every layer with numba
-    too_many = [(f, name, n) for f, name, n, _ in found
-                if n > MOST_PARAMETERS and not (f.startswith("engine/") and name in PER_SEGMENT_STEPS)]
-    assert too_many == []
+    assert [(f, name, n) for f, name, n, _ in found if n > MOST_PARAMETERS] == []
 
 
-def test_the_exempt_steps_are_inlined_and_exist():
-    """An exemption is for an inlined per-segment step only; one that is renamed or no longer inlined goes."""
-    inlined = {name: inline for _, name, _, inline in compiled_functions(ENGINE)}
-    assert PER_SEGMENT_STEPS <= set(inlined)
-    assert all(inlined[name] for name in PER_SEGMENT_STEPS)
+def test_the_per_segment_steps_are_inlined_and_take_the_segment_work():
+    """The steps run on every segment stay inlined (a compiled call would copy its arguments in each time) and
+    reach their arrays through the one SegmentWork, whose fields are the names they read."""
+    steps = {"build_segment", "search_events", "integrate_segment", "integrate_energy", "integrate_modal",
+             "monitor_modal", "monitor_row", "curvature_bound", "window_square", "move_to_end"}
+    found = {name: inline for _, name, _, inline in compiled_functions(ENGINE)}
+    assert steps <= set(found) and all(found[name] for name in steps)
+    read = set()
+    for path in ENGINE.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.FunctionDef) and node.name in steps:
+                assert node.args.args[0].arg == "w", node.name
+                read |= {a.attr for a in ast.walk(node) if isinstance(a, ast.Attribute)
+                         and isinstance(a.value, ast.Name) and a.value.id == "w"}
+    assert read <= set(bundles.SEGMENT_WORK_FIELDS)
+    assert {"kap", "C", "P", "diag", "mon_peak", "work", "cache"} <= read
 
 
 def test_a_synthetic_engine_folder_with_a_long_signature_is_caught(tmp_path):

@@ -2,11 +2,12 @@
 
 numba compiles a namedtuple into a struct, and a compiled function takes a few
 bundles instead of dozens of positional arrays.  The steps the loop runs on every
-segment (segment.build_segment, scene_loop.search_events, monitor_modal,
-integrate_segment, modal.integrate_modal, ...) are inlined, and there each array
-in a call's arguments costs a reference count, a bundle as many as it holds:
-they take the arrays they read, which run_scene unpacks once per run.  Bundling
-their arguments cost 8 to 31 % of a run on benchmarks/bench_scene.py's cases.
+segment (scene_loop.search_events, monitor_modal, integrate_energy, move_to_end,
+modal.integrate_modal, ...) are inlined, and there each array in a call's
+arguments costs a reference count, a namedtuple as many as it holds (bundling
+them in namedtuples cost 8 to 31 % of a run on benchmarks/bench_scene.py's
+cases): they take one SegmentWork, a structref, which counts only the fields a
+step reads.
 
 The optional parts of a scene (`springs`: PID and TMD units, `fric`: Coulomb
 friction, `harm`: a harmonic load, `record`: a load record) are not in a
@@ -18,6 +19,9 @@ that pruning is what makes a scene compile only the code it uses.
 from __future__ import annotations
 
 from collections import namedtuple
+
+from numba import types
+from numba.experimental import structref
 
 #: the storeys: floor masses, storey stiffness and damping matrices
 BuildingArrays = namedtuple("BuildingArrays", "mass stiffness damping")
@@ -83,7 +87,34 @@ Tables = namedtuple("Tables", "modal step work cursor")
 Workspace = namedtuple("Workspace", "seg rows vecs events tables")
 
 #: what the steps at an event's instant (resolve_events, settle, _record_impacts) work in: the segment's
-#: rows (kap C P), contact rows (cs ps cq pq), build_segment's scratch, the configuration cache and its
-#: cursor, the events and the velocities before them.  The same arrays as the workspace's, bundled apart: these steps are compiled
-#: calls, and each array of their arguments is copied in on every event
-InstantScratch = namedtuple("InstantScratch", "kap C P cs ps cq pq work cache cursor events v_before")
+#: rows (kap C P), contact rows (cs ps cq pq), the configuration cache and its cursor, the events and the
+#: velocities before them, and the per-segment steps' SegmentWork (settle builds segments with it).  The same arrays as the workspace's, bundled apart: these steps are compiled calls, and each
+#: array of their arguments is copied in on every event
+InstantScratch = namedtuple("InstantScratch", "kap C P cs ps cq pq cache cursor events v_before seg_work")
+
+
+@structref.register
+class SegmentWorkType(types.StructRef):
+    def preprocess_fields(self, fields):
+        return tuple((name, types.unliteral(typ)) for name, typ in fields)
+
+
+class SegmentWork(structref.StructRefProxy):
+    """The arrays the steps inlined on every segment work in, as one numba structref (built in run_scene).
+
+    A structref travels as one reference, and a step counts a reference only for each field it reads; a
+    namedtuple counts one for every array it holds, which made bundling these steps cost 8 to 31 %.  The
+    fields: the segment (kap C P ek pair single kpow), the scratch rows (Rows), the vectors the steps use
+    (the peak search's stack, an event search's output, reduced-size scratch cu1, |modal amplitudes| aw,
+    offsets before the segment, mode weights wt), each unit's next event (ev_t ev_side ev_kind),
+    build_segment's scratch, the modal tables, the configuration cache, the load vector, the run's state
+    (RunState's arrays but check), and what the segment writes (diagnostics, the monitors' peaks,
+    their times, the window's square).
+    """
+
+
+SEGMENT_WORK_FIELDS = ("kap C P ek pair single kpow cs ps cq pq cm pm cv pv cu pu stack found cu1 aw s_before wt "
+                       "ev_t ev_side ev_kind work mtab cache load_vec mode side sigma offset escape escape_v q v "
+                       "diag mon_peak mon_peak_t mon_x2").split()
+structref.define_proxy(SegmentWork, SegmentWorkType, SEGMENT_WORK_FIELDS)
+

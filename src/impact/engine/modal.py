@@ -173,9 +173,12 @@ def amplitude_moduli(n, wc, aw):
 
 
 @njit(cache=True, inline='always')
-def monitor_row(s, m, n, wc, C, mon_rows, mon_kind, mon_rec, kap, P, r0, r1, harmonic, mtab, cm, pm):
-    """Coefficient row of monitor m from the modal amplitudes wc[2n:4n] (the harmonic slots from C)."""
-    mvec = mtab.mvec
+def monitor_row(w, s, m, n, monitors, r0, r1, harmonic):
+    """Coefficient row of monitor m, into w.cm and w.pm, from the modal amplitudes wc[2n:4n] (the harmonic slots
+    from C); w: bundles.SegmentWork."""
+    wc, C, kap, P, cm, pm = w.work[1], w.C, w.kap, w.P, w.cm, w.pm
+    mon_rows, mon_kind, mon_rec = monitors.rows, monitors.kind, monitors.record_coef
+    mvec = w.mtab.mvec
     nt = kap.shape[0]
     for k in range(nt):
         cm[k] = 0.0
@@ -214,9 +217,10 @@ def end_values(ek, c, p, big_t):
 
 
 @njit(cache=True, inline='always')
-def curvature_bound(s, m, n, aw, wt, cm, pm, kpow, big_t, harmonic, mtab):
-    """Bound on |h''| over [0, T] of monitor m's (halved) row: the tabulated modal part, then the rest."""
-    mbnd = mtab.mbnd
+def curvature_bound(w, s, m, n, big_t, harmonic):
+    """Bound on |h''| over [0, T] of monitor m's (halved) row w.cm, w.pm: the tabulated modal part, then the rest."""
+    aw, wt, cm, pm, kpow = w.aw, w.wt, w.cm, w.pm, w.kpow
+    mbnd = w.mtab.mbnd
     acc = 0.0
     for k in range(2 * n):
         acc += wt[k] * mbnd[s, m, k] * aw[k]
@@ -247,15 +251,16 @@ def square_integral(c, p, wt, pair, single, big_t):
 
 
 @njit(cache=True, inline='always')
-def integrate_modal(s, n, work, cu1, wt, tau, units, mode, load_vec, record, r0, r1, P, pair, single, mtab, cache,
-                    pu, diag):
+def integrate_modal(w, s, n, tau, units, record, r0, r1):
     """Exact work of a record load, viscous dissipation and stuck time over [0, tau], from the modal tables.
 
     work: build_segment's scratch, with the modal amplitudes w in work[1][2n:4n] and the particular
     solution's (constant) reduced velocities u1 in work[0][2n:3n]; cu1: scratch of the reduced size;
     wt: the segment's mode weights (mode_weights), which halve the sums over k;
-    pair, single: integral_tables over tau; pu: (2, NPOLY) scratch.
+    pair, single: integral_tables over tau; pu: (2, NPOLY) scratch; all of them fields of w (bundles.SegmentWork).
     """
+    work, cu1, wt, mode, load_vec, P, pu, diag = w.work, w.cu1, w.wt, w.mode, w.load_vec, w.P, w.pu, w.diag
+    pair, single, mtab, cache = w.pair, w.single, w.mtab, w.cache
     gvis, lmod = mtab.gvis, mtab.lmod
     lam, vec, cred = cache.lam, cache.vec, cache.damping
     wf, wc = work

@@ -26,6 +26,7 @@ from impact.engine.bundles import (
     Rows,
     RunState,
     Segment,
+    SegmentWork,
     StepTables,
     Tables,
     Vectors,
@@ -196,7 +197,8 @@ def _still_leaving(j, nf, units, mode, escape, q, v):
 
 
 @njit(cache=True, inline='always')
-def _same_unit_state(j, nf, units, springs, mode, side, sigma, escape, escape_v, C, P):
+def _same_unit_state(j, nf, units, springs, w):
+    mode, side, sigma, escape, escape_v, C, P = w.mode, w.side, w.sigma, w.escape, w.escape_v, w.C, w.P
     i = j - 1
     if not same_unit(units, springs, i, j):
         return False
@@ -251,13 +253,15 @@ def _earliest(out, best, ties, j, kind, side, ev_t, ev_side, ev_kind):
 
 
 @njit(cache=True, inline='always')
-def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape, escape_v, tau_max,
-                  r0, r1, ev_t, ev_side, ev_kind, cs, ps, cq, pq, out, kpow, ek, ek_tau, wt, diag):
+def search_events(w, nf, units, springs, fric, tau_max, r0, r1, ek_tau):
     """Next event of every unit; returns the earliest time (inf if none up to tau_max).
 
     ek = exp(kap ek_tau): when ek_tau is tau_max, a unit far from its walls is cleared without a search.
     The searched rows are weighted half rows (modal.halve): half the exponentials per evaluation.
     """
+    kap, C, P, kpow, ek, wt, diag = w.kap, w.C, w.P, w.kpow, w.ek, w.wt, w.diag
+    mode, side, sigma, escape, escape_v = w.mode, w.side, w.sigma, w.escape, w.escape_v
+    ev_t, ev_side, ev_kind, cs, ps, cq, pq, out = w.ev_t, w.ev_side, w.ev_kind, w.cs, w.ps, w.cq, w.pq, w.found
     ukind, ufloor, um, uload, ud = units.kind, units.floor, units.mass, units.load, units.gap
     best = tau_max
     for j in range(um.shape[0]):
@@ -267,7 +271,7 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
             continue
         f = ufloor[j]
         half = 0.5 * ud[j]
-        if j > 0 and _same_unit_state(j, nf, units, springs, mode, side, sigma, escape, escape_v, C, P):
+        if j > 0 and _same_unit_state(j, nf, units, springs, w):
             # identical to the unit before (a multi-unit damper moving as one): the same event, bit for bit
             ev_t[j] = ev_t[j - 1]
             ev_side[j] = ev_side[j - 1]
@@ -332,9 +336,13 @@ def search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape
 
 
 @njit(cache=True, inline='always')
-def integrate_segment(kap, C, P, tau, nf, building, units, springs, mode, load_vec, harm, record, theta0,
-                      r0, r1, pair, single, cv, pv, cu, pu, diag):
-    """Exact work of the load, viscous dissipation and stuck time over [0, tau] (tables: integral_tables)."""
+def integrate_segment(w, tau, building, units, springs, harm, record, load_at):
+    """Exact work of the load, viscous dissipation and stuck time over [0, tau] (tables: integral_tables);
+    load_at: (theta0, r0, r1), the load at the segment's start (segment_load)."""
+    kap, C, P, mode, load_vec, pair, single, diag = w.kap, w.C, w.P, w.mode, w.load_vec, w.pair, w.single, w.diag
+    cv, pv, cu, pu = w.cv, w.pv, w.cu, w.pu
+    theta0, r0, r1 = load_at
+    nf = building.mass.shape[0]
     nt = kap.shape[0]
     nfull = C.shape[0]
     cb = building.damping
@@ -435,8 +443,7 @@ def _shift_row(kap, c, p, a, cs, ps):
 
 
 @njit(cache=True, inline='always')
-def monitor_modal(s, n, wc, aw, kap, kpow, ek, C, P, tau, t, t_win, monitors, r0, r1, harmonic, mtab, pair, single,
-                  cm, pm, cs, ps, stack, wt, mon_peak, mon_peak_t, mon_x2, diag):
+def monitor_modal(w, s, n, tau, t, t_win, monitors, r0, r1, harmonic):
     """Certified peaks of every monitor over the segment, and the roof's square integrated over the window.
 
     Rows and curvature bounds come from the modal tables: a segment whose ends
@@ -444,18 +451,20 @@ def monitor_modal(s, n, wc, aw, kap, kpow, ek, C, P, tau, t, t_win, monitors, r0
     peak_abs's own first test would settle it.  A monitor whose peak has
     reached its cap (a stroke at its wall) is not searched again.
     """
-    mon_rows, mon_kind, mon_rec, mon_cap = monitors.rows, monitors.kind, monitors.record_coef, monitors.cap
+    kap, kpow, ek, cm, pm, stack, wt, diag = w.kap, w.kpow, w.ek, w.cm, w.pm, w.stack, w.wt, w.diag
+    mon_peak, mon_peak_t = w.mon_peak, w.mon_peak_t
+    mon_rows, mon_cap = monitors.rows, monitors.cap
     for m in range(mon_rows.shape[0]):
         if m != 0 and mon_peak[m] >= mon_cap[m]:
             continue
-        monitor_row(s, m, n, wc, C, mon_rows, mon_kind, mon_rec, kap, P, r0, r1, harmonic, mtab, cm, pm)
+        monitor_row(w, s, m, n, monitors, r0, r1, harmonic)
         if m == 0 and t + tau > t_win:
-            window_square(kap, cm, pm, tau, t, t_win, pair, single, cs, ps, wt, mon_x2)
+            window_square(w, tau, t, t_win)
         halve(cm, wt)
         h0, h1 = end_values(ek, cm, pm, tau)
         ends = max(abs(h0), abs(h1))
         peak = mon_peak[m]
-        if ends > peak or ends + curvature_bound(s, m, n, aw, wt, cm, pm, kpow, tau, harmonic, mtab) * tau * tau / 8.0 \
+        if ends > peak or ends + curvature_bound(w, s, m, n, tau, harmonic) * tau * tau / 8.0 \
                 > peak * (1.0 + PEAK_RTOL):
             peak, at, certified = peak_abs(kap, kpow, ek, cm, pm, tau, peak, stack)
             if not certified:
@@ -466,8 +475,9 @@ def monitor_modal(s, n, wc, aw, kap, kpow, ek, C, P, tau, t, t_win, monitors, r0
 
 
 @njit(cache=True, inline='always')
-def window_square(kap, cm, pm, tau, t, t_win, pair, single, cs, ps, wt, mon_x2):
+def window_square(w, tau, t, t_win):
     """The first monitor's (the roof's) square integrated over the part of the segment inside the window."""
+    kap, cm, pm, pair, single, cs, ps, wt, mon_x2 = w.kap, w.cm, w.pm, w.pair, w.single, w.cs, w.ps, w.wt, w.mon_x2
     start = max(t_win - t, 0.0)
     if start > 0.0:
         # the one segment that the window's start cuts: tables of its own
@@ -579,10 +589,10 @@ def settle(t, model, springs, fric, harm, record, st, scratch, diag):
     Repeats until no unit changes, since every change alters the floors' motion.
     """
     p, building, units, load_vec = model.p, model.building, model.units, model.load_vec
-    mode, side, sigma, offset, escape, escape_v, check, q, v = (st.mode, st.side, st.sigma, st.offset, st.escape,
-                                                                st.escape_v, st.check, st.q, st.v)
+    mode, side, sigma, offset, escape, escape_v, check, v = (st.mode, st.side, st.sigma, st.offset, st.escape,
+                                                             st.escape_v, st.check, st.v)
     kap, C, P, cs, ps, cq, pq = scratch.kap, scratch.C, scratch.P, scratch.cs, scratch.ps, scratch.cq, scratch.pq
-    work, cache, cursor = scratch.work, scratch.cache, scratch.cursor
+    cache, cursor = scratch.cache, scratch.cursor
     ufloor, um, uload, ud = units.floor, units.mass, units.load, units.gap
     nf = building.mass.shape[0]
     nu = um.shape[0]
@@ -596,8 +606,7 @@ def settle(t, model, springs, fric, harm, record, st, scratch, diag):
         theta0 = omega * t + p[P_PHI]
     for _ in range(2 * nu + 2):
         s = config_slot(building, units, springs, load_vec, omega if harm is not None else 0.0, mode, cache, cursor)
-        build_segment(s, cache, units, springs, fric, mode, offset, sigma, nf, q, v, r0, r1, harm is not None, theta0,
-                      omega, kap, C, P, work)
+        build_segment(scratch.seg_work, s, units, springs, fric, harm is not None, (theta0, r0, r1), omega)
         # every unit is judged on the same segment, so identical units decide alike
         changed = False
         for j in range(nu):
@@ -837,20 +846,20 @@ def segment_load(p, record, harm, t, t_end):
 
 
 @njit(cache=True, inline='always')
-def integrate_energy(s, n, work, cu1, wt, tau, nf, building, units, springs, mode, load_vec, harm, record, theta0,
-                     r0, r1, kap, C, P, pair, single, mtab, cache, cv, pv, cu, pu, diag):
+def integrate_energy(w, s, n, tau, building, units, springs, harm, record, load_at):
     """The energy terms over the segment: from the modal tables under a record, from the rows under a harmonic."""
     if harm is None:
-        integrate_modal(s, n, work, cu1, wt, tau, units, mode, load_vec, record, r0, r1, P, pair, single, mtab, cache,
-                        pu, diag)
+        integrate_modal(w, s, n, tau, units, record, load_at[1], load_at[2])
     else:
-        integrate_segment(kap, C, P, tau, nf, building, units, springs, mode, load_vec, harm, record,
-                          theta0, r0, r1, pair, single, cv, pv, cu, pu, diag)
+        integrate_segment(w, tau, building, units, springs, harm, record, load_at)
 
 
 @njit(cache=True, inline='always')
-def move_to_end(nf, building, units, springs, fric, mode, sigma, kap, ek, C, P, tau, q, v, s_before, diag):
+def move_to_end(w, building, units, springs, fric, tau):
     """The state at the segment's end, the friction work on the way, and the largest stored energy."""
+    mode, sigma, kap, ek, C, P, q, v = w.mode, w.sigma, w.kap, w.ek, w.C, w.P, w.q, w.v
+    s_before, diag = w.s_before, w.diag
+    nf = building.mass.shape[0]
     ufloor = units.floor
     if fric is not None:
         for j in range(mode.shape[0]):
@@ -942,7 +951,7 @@ def run_scene(model, springs, fric, harm, record, start, cache, out):
     st = RunState(start.mode.copy(), start.side.copy(), np.zeros(nu, dtype=np.int64), np.zeros(nu),
                   np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64),
                   start.q.copy(), start.v.copy())
-    # the steps inlined on every segment take arrays, not bundles (see impact.engine.bundles)
+    # the steps inlined on every segment take one structref of the arrays they work in (impact.engine.bundles)
     kap, C, P, ek, pair, single, kpow = ws.seg
     cs, ps, cq, pq, cm, pm, cv, pv, cu, pu = ws.rows
     stack, found, qs, vs, _, cu1, aw, s_before, wt = ws.vecs
@@ -951,7 +960,10 @@ def run_scene(model, springs, fric, harm, record, start, cache, out):
     mode, side, sigma, offset, escape, escape_v = st.mode, st.side, st.sigma, st.offset, st.escape, st.escape_v
     q, v = st.q, st.v
     diag, mon_peak, mon_peak_t, mon_x2, ts, samples = out.diag, out.peak, out.peak_t, out.x2, out.ts, out.samples
-    instant = InstantScratch(kap, C, P, cs, ps, cq, pq, work, cache, cursor, ws.events, ws.vecs.v_before)
+    w = SegmentWork(kap, C, P, ek, pair, single, kpow, cs, ps, cq, pq, cm, pm, cv, pv, cu, pu, stack, found, cu1, aw,
+                    s_before, wt, ev_t, ev_side, ev_kind, work, mtab, cache, load_vec, mode, side, sigma, offset,
+                    escape, escape_v, q, v, diag, mon_peak, mon_peak_t, mon_x2)
+    instant = InstantScratch(kap, C, P, cs, ps, cq, pq, cache, cursor, ws.events, ws.vecs.v_before, w)
     t = p[P_T0]
     t_end = p[P_TEND]
     _start(t, model, springs, fric, harm, record, st, instant, out)
@@ -975,8 +987,7 @@ def run_scene(model, springs, fric, harm, record, start, cache, out):
                             cursor)
             modal_slot(s, key, cache, nf, units, mode, monitors.rows, monitors.kind, mtab)
             slot_key = key
-        build_segment(s, cache, units, springs, fric, mode, offset, sigma, nf, q, v, r0, r1, harm is not None, theta0,
-                      omega, kap, C, P, work)
+        build_segment(w, s, units, springs, fric, harm is not None, (theta0, r0, r1), omega)
         if key != kpow_key:
             kappa_powers(kap, kpow)
             mode_weights(kap, wt)
@@ -987,9 +998,7 @@ def run_scene(model, springs, fric, harm, record, start, cache, out):
             tab_key = key
             tab_tau = tau_max
         diag[D_SEGMENTS] += 1.0
-        best = search_events(kap, C, P, nf, units, springs, fric, mode, side, sigma, escape, escape_v, tau_max,
-                             r0, r1, ev_t, ev_side, ev_kind, cs, ps, cq, pq, found, kpow, ek,
-                             tab_tau if key == tab_key else -1.0, wt, diag)
+        best = search_events(w, nf, units, springs, fric, tau_max, r0, r1, tab_tau if key == tab_key else -1.0)
         event = best <= tau_max and best < np.inf
         tau = best if event else tau_max
         n = cache.size[s]
@@ -999,13 +1008,11 @@ def run_scene(model, springs, fric, harm, record, start, cache, out):
             step_tables(s, key, tau, p[P_REC_DT] if record is not None else -1.0, kap, ek, pair, single, dtab)
             tab_key = key
             tab_tau = tau
-        integrate_energy(s, n, work, cu1, wt, tau, nf, building, units, springs, mode, load_vec, harm, record, theta0,
-                         r0, r1, kap, C, P, pair, single, mtab, cache, cv, pv, cu, pu, diag)
-        monitor_modal(s, n, wc, aw, kap, kpow, ek, C, P, tau, t, p[P_TWIN], monitors, r0, r1, harm is not None, mtab,
-                      pair, single, cm, pm, cs, ps, stack, wt, mon_peak, mon_peak_t, mon_x2, diag)
+        integrate_energy(w, s, n, tau, building, units, springs, harm, record, (theta0, r0, r1))
+        monitor_modal(w, s, n, tau, t, p[P_TWIN], monitors, r0, r1, harm is not None)
         if its < ts.shape[0]:
             its = sample_segment(kap, C, P, t, tau, ts, its, samples, qs, vs)
-        move_to_end(nf, building, units, springs, fric, mode, sigma, kap, ek, C, P, tau, q, v, s_before, diag)
+        move_to_end(w, building, units, springs, fric, tau)
         t = t_next if not event else t + tau
         for j in range(nu):
             if escape[j] != 0 and not _still_leaving(j, nf, units, mode, escape, q, v):

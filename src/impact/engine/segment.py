@@ -325,17 +325,20 @@ def config_slot(building, units, springs, load_vec, omega, mode, cache, cursor):
 # ----------------------------------------------------------------------------
 
 @njit(cache=True, inline='always')
-def build_segment(s, cache, units, springs, fric, mode, offset, sigma, nf, q, v,
-                  r0, r1, harmonic, theta0, omega, kap, C, P, work):
-    """Coefficient rows of every degree of freedom from state (q, v).
+def build_segment(w, s, units, springs, fric, harmonic, load_at, omega):
+    """Coefficient rows w.C, w.P (over exponents w.kap) of every degree of freedom from the state (w.q, w.v) in
+    configuration slot s of w.cache; w: bundles.SegmentWork.
 
-    r0 + r1 tau: the record's value on the segment (per unit of load_vec);
+    load_at = (theta0, r0, r1): r0 + r1 tau is the record's value on the segment (per unit of load_vec);
     harmonic: the load is sin(theta0 + omega tau) per unit of load_vec.
-    work = (floats, complexes): scratch of 7 and 4 times the largest reduced size, so that a
+    w.work = (floats, complexes): scratch of 7 and 4 times the largest reduced size, so that a
     segment allocates nothing; the modal amplitudes are left in complexes[2n:4n] and the particular
     solution's velocity in floats[2n:3n] (the modal shortcuts read them).
     """
-    keys, nr, lam, vec, vinv, kinv, cred, fidx, ellr, zc = cache
+    mode, offset, sigma, q, v, kap, C, P, work = w.mode, w.offset, w.sigma, w.q, w.v, w.kap, w.C, w.P, w.work
+    theta0, r0, r1 = load_at
+    nf = C.shape[0] - units.mass.shape[0]
+    keys, nr, lam, vec, vinv, kinv, cred, fidx, ellr, zc = w.cache
     ufloor, um, uload = units.floor, units.mass, units.load
     n = nr[s]
     nt = kap.shape[0]
