@@ -18,6 +18,15 @@ TOO_SLOW = "too slow at this setting"
 #: the meanings of the 0/1 flag every run records: whether it stopped at the engine's cap on events
 EVENT_CAP_MEANINGS = ("finished", "stopped_at_event_cap")
 
+#: what a stage that records scene runs (loads, ida) measures of each run, as (long name, units) of its variable
+RUN_MEASURES = {
+    "peak_accel": ("peak absolute roof acceleration", "m s-2"),
+    "stroke": ("largest stroke of the damper mass relative to the roof", "m"),
+    "impacts": ("number of impacts", "1"),
+    "energy_residual": ("energy balance residual of the run, relative", "1"),
+    "event_cap_reached": ("the run stopped at the engine's event cap", None),
+}
+
 DAMPERS = {"cid": "CID", "pid": "PID", "tmd": "TMD", "bare": "bare", "none": "bare"}
 
 #: the numerics stage's methods and cases (stages/numerics/plan.py)

@@ -7,6 +7,7 @@ from impact.model.params import ParameterError
 from impact.model.records import RecordError
 from impact.model.scene import DAMPER_KINDS
 from impact.model.suites import is_suite_key, parse_key, suite_keys
+from impact.outputs.labels import RUN_MEASURES
 from impact.stages.loads.plan import buildings
 
 #: the cases of one building: the bare building, then each damper type
@@ -57,11 +58,7 @@ def stage_buildings(loads: dict) -> list[str]:
 MEASURES = {
     "drift_ratio": ("peak inter-storey drift ratio (drift over the storey height)", "1"),
     "peak_roof": ("peak roof displacement relative to the ground", "m"),
-    "peak_accel": ("peak absolute roof acceleration", "m s-2"),
-    "stroke": ("largest stroke of the damper mass relative to the roof", "m"),
-    "impacts": ("number of impacts", "1"),
-    "energy_residual": ("energy balance residual of the run, relative", "1"),
-    "event_cap_reached": ("the run stopped at the engine's event cap", None),
+    **RUN_MEASURES,
 }
 SCALED = ("drift_ratio", "peak_roof", "peak_accel", "stroke")
 #: the measures that are counts or flags (stored as integers); a flag (units None) has meanings instead

@@ -13,7 +13,7 @@ from impact.model.building import Building
 from impact.model.params import G_GRAV
 from impact.model.scene import DAMPER_KINDS
 from impact.outputs.files import as_integers, flag
-from impact.outputs.labels import EVENT_CAP_MEANINGS
+from impact.outputs.labels import EVENT_CAP_MEANINGS, RUN_MEASURES
 from impact.stages.loads.plan import (
     RESPONSES,
     SAME,
@@ -23,14 +23,14 @@ from impact.stages.loads.plan import (
 MEASURES = {
     "peak_roof": ("peak roof displacement", "m"),
     "rms_roof": ("RMS roof displacement", "m"),
-    "peak_accel": ("peak absolute roof acceleration", "m s-2"),
+    "peak_accel": RUN_MEASURES["peak_accel"],
     "peak_drift": ("peak inter-storey drift", "m"),
-    "stroke": ("largest stroke of the damper mass relative to the roof", "m"),
-    "impacts": ("number of impacts", "1"),
+    "stroke": RUN_MEASURES["stroke"],
+    "impacts": RUN_MEASURES["impacts"],
     "impulse_mean": ("mean momentum exchanged per impact", "N s"),
     "impulse_max": ("largest momentum exchanged in one impact", "N s"),
-    "energy_residual": ("energy balance residual of the run, relative", "1"),
-    "event_cap_reached": ("the run stopped at the event cap", None),
+    "energy_residual": RUN_MEASURES["energy_residual"],
+    "event_cap_reached": RUN_MEASURES["event_cap_reached"],
 }
 #: the measures that are counts or flags (stored as integers); a flag's units are its meanings
 WHOLE = ("impacts", "event_cap_reached")
