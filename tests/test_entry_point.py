@@ -110,6 +110,9 @@ def test_both_loops_report_the_same_diagnostics_and_record_the_same_impacts():
     np.testing.assert_allclose(rec["v_plus"] + mu * rec["w_plus"], rec["v_minus"] + mu * rec["w_minus"],
                                rtol=0, atol=1e-14)
     np.testing.assert_allclose(rec["impulse"], rec["side"] * (rec["v_plus"] - rec["v_minus"]), rtol=1e-12)
+    # Newton's law with the reduced mass: the impulse is mu (1 + e) / (1 + mu) of the approach speed
+    approach = rec["side"] * (rec["w_minus"] - rec["v_minus"])
+    np.testing.assert_allclose(rec["impulse"], mu * (1.0 + system.e) / (1.0 + mu) * approach, rtol=1e-12)
     assert np.all(rec["impulse"] > 0.0)
     for column in ("t", "side", "x", "v_minus", "w_minus", "v_plus", "w_plus", "stuck", "impulse"):
         np.testing.assert_allclose(full.records[column], rec[column], rtol=1e-9, atol=1e-12, err_msg=column)

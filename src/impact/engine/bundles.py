@@ -86,11 +86,11 @@ Tables = namedtuple("Tables", "modal step work cursor")
 #: the whole workspace of a run, allocated once
 Workspace = namedtuple("Workspace", "seg rows vecs events tables")
 
-#: what the steps at an event's instant (resolve_events, settle, _record_impacts) work in: the segment's
-#: rows (kap C P), contact rows (cs ps cq pq), the configuration cache and its cursor, the events and the
-#: velocities before them, and the per-segment steps' SegmentWork (settle builds segments with it).  The same arrays as the workspace's, bundled apart: these steps are compiled calls, and each
-#: array of their arguments is copied in on every event
-InstantScratch = namedtuple("InstantScratch", "kap C P cs ps cq pq cache cursor events v_before seg_work")
+#: what the steps at an event's instant (resolve_events, settle, _record_impacts) work in beside the run's
+#: state: the per-segment steps' SegmentWork (settle builds segments and contact rows in it), the cache's
+#: cursor, the events and the velocities before them.  These steps are compiled calls, not inlined, and
+#: each array of their arguments is copied in on every event
+InstantScratch = namedtuple("InstantScratch", "seg_work cursor events v_before")
 
 
 @structref.register

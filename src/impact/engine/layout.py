@@ -35,7 +35,8 @@ NDIAG = 21
 
 # impact record columns: their names in order, and each one's index.  x: the displacement of the unit's
 # floor; v, w: the floor's and the unit's velocities before (minus) and after (plus); stuck: whether the wall
-# holds the unit after it; impulse: the wall's impulse on the unit (>= 0)
+# holds the unit after it; impulse: Newton's impulse of the wall on the unit (>= 0; the plastic end of a
+# rebound too slow to resolve, contact.plastic_end, is not in it)
 RECORD_COLUMNS = ("t", "unit", "side", "x", "v_minus", "w_minus", "v_plus", "w_plus", "stuck", "impulse")
 R_T, R_UNIT, R_SIDE, R_X, R_V0, R_W0, R_V1, R_W1, R_STUCK, R_IMPULSE = range(len(RECORD_COLUMNS))
 NREC = len(RECORD_COLUMNS)

@@ -30,7 +30,9 @@ branch that does not apply, so a CID run never compiles the pendulum path.
 
 The loop reads the engine's one index layout (layout.py) and shares with the
 scene loop the certified search (events.first_exit), the contact decisions
-(contact.stays, contact.floor_decision) and the row bound (segment.bound_tab);
+(contact.stays, contact.floor_decision), the plastic end of a rebound
+(contact.plastic_end), the row bound and |kap| powers (segment.bound_tab,
+kappa_powers);
 what it keeps is the one-unit algebra above, which the scene loop writes for
 any number of units and so rounds differently.
 """
@@ -608,7 +610,8 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
             rec[irec, L.R_V1] = z[1]
             rec[irec, L.R_W1] = z[3]
             rec[irec, L.R_STUCK] = 1.0 if mode == L.MODE_STUCK else 0.0
-            rec[irec, L.R_IMPULSE] = side * p[L.P_MU] * (wm - z[3])
+            # Newton's impulse alone, as solve_impulses gives it in the scene loop: a plastic end is not in it
+            rec[irec, L.R_IMPULSE] = p[L.P_MU] * (1.0 + p[L.P_E]) * approach / (1.0 + p[L.P_MU])
             irec += 1
     diag[L.D_E1] = _energy(z, p)
     diag[L.D_NREC] = irec

@@ -5,9 +5,9 @@ unit's next event (certified), integrates the energy terms and the monitors
 exactly over the segment, moves the state to the segment's end and resolves
 the events found there (all units whose event falls at that instant).
 
-Arrays travel in the named bundles of :mod:`impact.engine.bundles`, except
-into the steps inlined on every segment, which take the arrays they read (see
-that module on why).  Optional parts arrive as their own arguments, None when
+Arrays travel in the named bundles of :mod:`impact.engine.bundles`; the steps
+inlined on every segment take one structref of them, SegmentWork (see that
+module on why).  Optional parts arrive as their own arguments, None when
 absent, and numba prunes them at compile time: `springs` (PID and TMD units),
 `fric` (Coulomb friction under CID units), `harm` (a harmonic load) and
 `record` (a piecewise-linear load record).
@@ -591,8 +591,9 @@ def settle(t, model, springs, fric, harm, record, st, scratch, diag):
     p, building, units, load_vec = model.p, model.building, model.units, model.load_vec
     mode, side, sigma, offset, escape, escape_v, check, v = (st.mode, st.side, st.sigma, st.offset, st.escape,
                                                              st.escape_v, st.check, st.v)
-    kap, C, P, cs, ps, cq, pq = scratch.kap, scratch.C, scratch.P, scratch.cs, scratch.ps, scratch.cq, scratch.pq
-    cache, cursor = scratch.cache, scratch.cursor
+    w = scratch.seg_work
+    kap, C, P, cs, ps, cq, pq, cache = w.kap, w.C, w.P, w.cs, w.ps, w.cq, w.pq, w.cache
+    cursor = scratch.cursor
     ufloor, um, uload, ud = units.floor, units.mass, units.load, units.gap
     nf = building.mass.shape[0]
     nu = um.shape[0]
@@ -606,7 +607,7 @@ def settle(t, model, springs, fric, harm, record, st, scratch, diag):
         theta0 = omega * t + p[P_PHI]
     for _ in range(2 * nu + 2):
         s = config_slot(building, units, springs, load_vec, omega if harm is not None else 0.0, mode, cache, cursor)
-        build_segment(scratch.seg_work, s, units, springs, fric, harm is not None, (theta0, r0, r1), omega)
+        build_segment(w, s, units, springs, fric, harm is not None, (theta0, r0, r1), omega)
         # every unit is judged on the same segment, so identical units decide alike
         changed = False
         for j in range(nu):
@@ -963,7 +964,7 @@ def run_scene(model, springs, fric, harm, record, start, cache, out):
     w = SegmentWork(kap, C, P, ek, pair, single, kpow, cs, ps, cq, pq, cm, pm, cv, pv, cu, pu, stack, found, cu1, aw,
                     s_before, wt, ev_t, ev_side, ev_kind, work, mtab, cache, load_vec, mode, side, sigma, offset,
                     escape, escape_v, q, v, diag, mon_peak, mon_peak_t, mon_x2)
-    instant = InstantScratch(kap, C, P, cs, ps, cq, pq, cache, cursor, ws.events, ws.vecs.v_before, w)
+    instant = InstantScratch(w, cursor, ws.events, ws.vecs.v_before)
     t = p[P_T0]
     t_end = p[P_TEND]
     _start(t, model, springs, fric, harm, record, st, instant, out)
