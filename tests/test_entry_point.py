@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import inspect
 import math
 import re
 
 import numpy as np
 import pytest
 
+from impact.engine import layout, paper_loop
 from impact.engine import run as engine
 from impact.engine.paper import simulate as paper_simulate
 from impact.engine.scenes import simulate_scene
@@ -85,10 +87,6 @@ def test_unknown_measures_and_stray_options_are_refused_by_name():
 
 def test_the_paper_loop_defines_no_index_of_its_own_and_reads_the_engines_one_layout():
     """Every parameter, diagnostic, record and mode index the paper loop reads is layout.py's."""
-    import inspect
-
-    from impact.engine import layout, paper_loop
-
     own = [name for name in vars(paper_loop) if re.fullmatch(r"(P|D|R|MODE)_[A-Z0-9_]+|N(PAR|DIAG|REC)\w*", name)]
     assert own == [] and paper_loop.L is layout
     read = set(re.findall(r"\bL\.([A-Z][A-Z0-9_]*)", inspect.getsource(paper_loop)))

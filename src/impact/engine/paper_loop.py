@@ -32,9 +32,8 @@ The loop reads the engine's one index layout (layout.py) and shares with the
 scene loop the certified search (events.first_exit), the contact decisions
 (contact.stays, contact.floor_decision), the plastic end of a rebound
 (contact.plastic_end), the row bound and |kap| powers (segment.bound_tab,
-kappa_powers);
-what it keeps is the one-unit algebra above, which the scene loop writes for
-any number of units and so rounds differently.
+kappa_powers); what it keeps is the one-unit algebra above, which the scene
+loop writes for any number of units and so rounds differently.
 """
 
 from __future__ import annotations
