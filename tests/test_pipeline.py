@@ -90,17 +90,31 @@ def test_sweep_dataset_is_self_describing_and_round_trips(smoke, tmp_path):
 
 
 def test_smoke_numbers_match_the_frozen_study(smoke):
-    """Registry, one writer and the moved Snakefile changed no number (run times aside): see smoke_digest."""
-    from reference import smoke_digest
+    """The smoke study's numbers (run times aside) are the frozen ones, each within its own round-off
+    sensitivity measured over BLAS kernel sets: see smoke_digest and within_round_off."""
+    from reference import smoke_digest, within_round_off
 
-    frozen = json.loads((ROOT / "tests" / "data" / "smoke_reference.json").read_text())
+    frozen = json.loads((ROOT / "tests" / "data" / "smoke_reference.json").read_text())["entries"]
     now = smoke_digest(smoke / "results")
     assert sorted(now) == sorted(frozen)
-    for key, (count, total, squares, nans) in frozen.items():
-        got = now[key]
-        assert (got[0], got[3]) == (count, nans), key
-        assert got[1] == pytest.approx(total, rel=1e-9, abs=1e-12), key
-        assert got[2] == pytest.approx(squares, rel=1e-9, abs=1e-12), key
+    missed = {key: miss for key, entry in frozen.items() if (miss := within_round_off(entry, now[key]))}
+    assert not missed, missed
+
+
+def test_the_fingerprint_tolerance_is_each_entrys_own():
+    """An entry that round-off moves gets the room its spread measures; one it does not move keeps 1e-9, and
+    its counts exactly."""
+    from reference import within_round_off
+
+    steady = {"stats": [10, 100.0, 1000.0, 0], "spread": [0, 0.0, 0.0, 0]}
+    assert within_round_off(steady, [10, 100.0 + 5e-8, 1000.0, 0]) == []
+    assert within_round_off(steady, [10, 100.0 + 2e-7, 1000.0, 0]) != []
+    assert within_round_off(steady, [11, 100.0, 1000.0, 0]) != []
+    assert within_round_off(steady, [10, 100.0, 1000.0, 1]) != []
+    sensitive = {"stats": [10, 100.0, 1000.0, 0], "spread": [1, 1e-6, 0.0, 1]}
+    assert within_round_off(sensitive, [10, 100.0 + 2.9e-6, 1000.0, 0]) == []
+    assert within_round_off(sensitive, [10, 100.0 + 3.1e-6, 1000.0, 0]) != []
+    assert within_round_off(sensitive, [9, 100.0, 1000.0, 1]) == []
 
 
 def test_every_dataset_of_the_study_is_self_describing(smoke):

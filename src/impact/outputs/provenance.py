@@ -9,7 +9,7 @@ import subprocess
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
-from impact import __version__
+from impact import __version__, kernels
 
 _REPO = Path(__file__).resolve().parents[3]
 PACKAGES = ("numpy", "scipy", "numba", "xarray", "netCDF4", "pandas", "matplotlib", "snakemake")
@@ -55,4 +55,5 @@ def attributes() -> dict:
         "git_commit": state["git_commit"],
         "git_dirty": state["git_dirty"],
         "date_created": now_utc(),
+        "kernels": kernels.kernels(),
     }

@@ -1,0 +1,105 @@
+"""One kernel set for the study (impact.kernels): chosen before numpy loads, and what it buys.
+
+Kernel sets round differently (an AVX-512 machine's SkylakeX kernels against an AVX2 machine's Haswell ones),
+and the modal decomposition under every scene goes through them.  The study holds OpenBLAS and numpy's loops to
+one set, so the same set gives the same bits in any process; another set moves a value no further than its own
+round-off sensitivity, measured as the spread a 1e-15 change of the record's scale gives it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from reference import HANG_GUARD_S
+
+from impact import kernels
+
+HERE = Path(__file__).parent
+#: OpenBLAS's generic x86-64 kernels (it reports them as Katmai): every x86-64 CPU runs them
+GENERIC = "Prescott"
+OPENBLAS, NUMPY = kernels.PINS["openblas"], kernels.PINS["numpy"]
+
+
+@pytest.fixture
+def any_cpu(monkeypatch):
+    monkeypatch.setattr(kernels, "_cpu_can_run_it", lambda: True)
+
+
+def test_the_pinned_sets_are_chosen_unless_another_is_named(any_cpu):
+    env = {}
+    assert kernels.apply(env) == {"openblas": OPENBLAS.value, "numpy": NUMPY.value}
+    assert env == {OPENBLAS.variable: OPENBLAS.value, NUMPY.variable: NUMPY.value} and kernels.pinned(env)
+    env = {OPENBLAS.override: "SkylakeX", OPENBLAS.variable: "Haswell"}
+    assert kernels.apply(env)["openblas"] == "SkylakeX" and env[OPENBLAS.variable] == "SkylakeX"
+    assert not kernels.pinned(env)
+
+
+def test_native_leaves_the_choice_to_the_library_not_to_the_machines_environment(any_cpu):
+    env = {OPENBLAS.override: "native", OPENBLAS.variable: "Haswell", NUMPY.override: "NATIVE"}
+    assert kernels.apply(env) == {"openblas": None, "numpy": None}
+    assert OPENBLAS.variable not in env and NUMPY.variable not in env
+
+
+def test_a_cpu_that_cannot_run_the_pinned_sets_is_left_to_the_libraries(monkeypatch, tmp_path):
+    cpuinfo = tmp_path / "cpuinfo"
+    monkeypatch.setattr(kernels.platform, "machine", lambda: "x86_64")
+    cpuinfo.write_text("processor : 0\nflags : fpu sse sse2 avx\n")
+    assert not kernels._cpu_can_run_it(str(cpuinfo))
+    cpuinfo.write_text(f"processor : 0\nflags : fpu sse sse2 avx {' '.join(kernels.NEEDS)}\n")
+    assert kernels._cpu_can_run_it(str(cpuinfo))
+    monkeypatch.setattr(kernels.platform, "machine", lambda: "aarch64")
+    assert not kernels._cpu_can_run_it(str(cpuinfo))
+
+
+def test_this_test_run_computes_with_the_pinned_sets():
+    """conftest.py chose the sets before numpy loaded: the libraries report them (where the CPU runs them)."""
+    if not kernels.pinned():
+        pytest.skip(f"this run computes with {kernels.chosen()}")
+    loops, blas = kernels.kernels().split("; ")
+    assert loops == f"numpy {NUMPY.value}" and set(blas.split(", ")) == {f"openblas {OPENBLAS.value}"}
+
+
+def _values(**overrides: str) -> dict:
+    env = dict(os.environ) | {kernels.PINS[library].override: value for library, value in overrides.items()}
+    kernels.apply(env)  # as the workflow and the tests do, before the process loads numpy
+    proc = subprocess.run([sys.executable, str(HERE / "kernel_values.py")], env=env, capture_output=True, text=True,
+                          timeout=HANG_GUARD_S)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return json.loads(proc.stdout)
+
+
+@pytest.fixture(scope="module")
+def pinned():
+    if not kernels.pinned({}):
+        pytest.skip("this CPU does not run the pinned kernel sets")
+    return _values()
+
+
+@pytest.mark.slow
+def test_the_pinned_sets_give_the_same_bits_in_another_process(pinned):
+    again = _values()
+    both = f"numpy {NUMPY.value}; openblas {OPENBLAS.value}, openblas {OPENBLAS.value}"
+    assert again["kernels"] == pinned["kernels"] == both
+    assert {k: v["value"] for k, v in again["values"].items()} == {k: v["value"] for k, v in pinned["values"].items()}
+
+
+@pytest.mark.slow
+def test_other_kernels_move_each_value_within_its_round_off_sensitivity(pinned):
+    """OpenBLAS's generic kernels (which every x86-64 CPU runs) and numpy's loops as the CPU picks them, against
+    the pinned sets: each value within three times the larger spread of its round-off ensemble, or 1e-12 of its
+    size where that ensemble does not move it."""
+    other = _values(openblas=GENERIC, numpy=kernels.NATIVE)
+    assert OPENBLAS.value not in other["kernels"]
+    moved = 0
+    for key, ours in pinned["values"].items():
+        theirs = other["values"][key]
+        sensitivity = max(ours["spread"], theirs["spread"], 1e-12 * abs(ours["value"]))
+        assert abs(theirs["value"] - ours["value"]) <= 3.0 * sensitivity, (key, ours, theirs)
+        moved += theirs["value"] != ours["value"]
+    # the kernel sets do round differently here: the test compares two different computations
+    assert moved > 0
