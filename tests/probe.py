@@ -26,8 +26,12 @@ PENETRATION_TOL = 1e-9   # beyond a wall, over the motion's scale
 SAMPLES = 4001           # dense output points per run for the peak check
 
 
-def _building(rng) -> Building:
-    storeys = int(rng.integers(1, 5))
+#: how far the suite's probe draws: up to 4 storeys, 3 dampers, 6 units a damper (tools/probe_scenes.py draws wider)
+REACH = {"storeys": 4, "dampers": 3, "units": (1, 1, 2, 3, 6)}
+
+
+def _building(rng, most_storeys: int) -> Building:
+    storeys = int(rng.integers(1, most_storeys + 1))
     zeta = float(rng.uniform(0.005, 0.1))
     period = float(10 ** rng.uniform(-1, 0.5))
     if rng.random() < 0.5:
@@ -79,11 +83,11 @@ def _tuning(rng) -> float:
     return float(10 ** rng.uniform(-1, 1))
 
 
-def _damper(rng, building: Building, scale: float) -> Damper:
+def _damper(rng, building: Building, scale: float, units_from: tuple) -> Damper:
     kind = str(rng.choice(["cid", "pid", "tmd"]))
     mass = building.total_mass * float(10 ** rng.uniform(-3, -0.7))
     floor = int(rng.integers(1, building.storeys + 1))
-    units = int(rng.choice([1, 1, 2, 3, 6]))
+    units = int(rng.choice(list(units_from)))
     if kind == "tmd":
         return Damper("tmd", mass=mass, tuning=_tuning(rng), damping=float(rng.uniform(0, 0.3)),
                       floor=floor, units=units)
@@ -96,11 +100,12 @@ def _damper(rng, building: Building, scale: float) -> Damper:
     return Damper("cid", mass=mass, gap=gap, e=e, nu=nu, floor=floor, units=units)
 
 
-def draw_scene(rng, seconds: float = 3.0) -> tuple[Scene, float]:
-    """One random scene of about ``seconds`` and its motion's scale (metres)."""
-    building = _building(rng)
+def draw_scene(rng, seconds: float = 3.0, reach: dict = REACH) -> tuple[Scene, float]:
+    """One random scene of about ``seconds`` and its motion's scale (metres), as far as ``reach`` goes."""
+    building = _building(rng, reach["storeys"])
     load, scale = _load(rng, building, seconds)
-    dampers = tuple(_damper(rng, building, scale) for _ in range(int(rng.integers(0, 4))))
+    count = int(rng.integers(0, reach["dampers"] + 1))
+    dampers = tuple(_damper(rng, building, scale, reach["units"]) for _ in range(count))
     start = str(rng.choice(["centre", "left", "right"]))
     duration = float(rng.uniform(0.3, 1.3)) * seconds if isinstance(load, Harmonic) else None
     return Scene(building, dampers, load, duration=duration, start=start), scale

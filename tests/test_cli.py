@@ -64,6 +64,12 @@ def test_amplitude_ratio_means_the_same_in_masri_and_run(capsys):
     (["quake", "--record", "elcentro", "--damper", "tmd", "--gap-m", "0.1"], "--gap-m is not used by --damper tmd"),
     (["quake", "--record", "elcentro", "--plot", "x.png"], "--plot draws a damper"),
     (["run", "--e", "2"], "--e"),
+    # what a new user tripped on: a plot in a format matplotlib does not draw, a dataset that is not netCDF or
+    # goes to a folder that does not exist, a record in none of the forms --record takes
+    (["quake", "--record", "elcentro", "--damper", "cid", "--gap-m", "0.05", "--plot", "x.txt"], ".png, .pdf, .svg"),
+    (["sweep", "--out", "s.txt"], "must end in .nc"),
+    (["sweep", "--out", "/nonexistent/dir/s.nc"], "does not exist"),
+    (["quake", "--record", "no-such-record"], "fema-farfield:ID:a|b"),
 ])
 def test_usage_errors_exit_2_naming_the_flag(argv, words, capsys):
     with pytest.raises(SystemExit) as exc:
@@ -86,3 +92,35 @@ def test_plot_draws_the_run_it_reports(argv, tmp_path, capsys):
     assert impacts > 0
     # the reported run is the drawn one: it ran on the scene loop, the one that samples
     assert out.get("loop", "scene") == "scene"
+
+
+def test_quake_tunes_a_tmd_for_the_building_unless_told(capsys):
+    """A TMD given no tuning or damping is the study's design for the building and its mass (Den Hartog on the
+    first mode), which lowers the roof's peak under the README's own example, where an untuned, undamped one
+    (f = 1, no damping: the old defaults) raised it."""
+    from impact.model.building import Building
+    from impact.stages.loads.plan import tmd_damper
+
+    quake = ["quake", "--record", "fema-farfield:12:a", "--storeys", "3"]
+    peaks = {}
+    for name, flags in (("bare", []), ("designed", ["--damper", "tmd"]),
+                        ("untuned", ["--damper", "tmd", "--tuning", "1", "--damping", "0"])):
+        main([*quake, *flags])
+        out = json.loads(capsys.readouterr().out)
+        peaks[name] = out["peak_roof_displacement_m"]
+        if name == "designed":
+            design = tmd_damper(Building.uniform(3, 1.0, 0.02), 0.02)
+            assert out["dampers"][0]["tuning"] == design.tuning and out["dampers"][0]["damping"] == design.damping
+    assert peaks["designed"] < peaks["bare"] < peaks["untuned"], peaks
+
+
+def test_sweep_out_writes_the_dataset_and_prints_its_summary(tmp_path, capsys):
+    import xarray as xr
+
+    path = tmp_path / "s.nc"
+    main(["sweep", "--r-min", "0.9", "--r-max", "1.1", "--r-step", "0.1", "--periods", "60", "--average-from", "30",
+          "--out", str(path)])
+    out = json.loads(capsys.readouterr().out)
+    assert out["out"] == str(path) and "amplitude" not in out and "r" not in out and "X_m" in out
+    with xr.open_dataset(path) as ds:
+        assert ds.sizes["freq_ratio"] == 3

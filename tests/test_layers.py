@@ -223,3 +223,15 @@ def test_a_content_edit_changes_the_digest_of_exactly_the_scripts_that_reach_it(
     assert {"sweep_curve", "design_sweep", "continuation_curve", "ensemble_curve", "masri_check",
             "validation_cases", "numerics_work_precision_piece", "loads_damper", "robustness_design"} <= reaches
     assert not {"figure", "report", "tmd_optimum", "paper_vs_reproduced"} & reaches
+
+
+def test_the_rules_take_the_damper_kinds_from_the_model():
+    """No rules file spells the damper kinds out: their wildcard patterns come from DAMPER_KINDS and
+    IMPACT_KINDS (common.smk), so a new kind in the model matches every rule."""
+    from impact.model.params import IMPACT_KINDS
+    from impact.model.scene import DAMPER_KINDS
+
+    spelt = re.compile("|".join(rf"\b{kind}\|" for kind in {*DAMPER_KINDS, *IMPACT_KINDS}))
+    found = [f"{smk.name}:{i}" for smk in sorted(RULES.glob("*.smk"))
+             for i, line in enumerate(smk.read_text().splitlines(), 1) if spelt.search(line)]
+    assert found == []

@@ -322,6 +322,9 @@ def _rules_whose_params_changed(out: str) -> set[str]:
     ({"protocol": {"gap": {"min": -1.0, "max": 1.0, "step": 0.5}}}, "'min'"),
     ({"figures": {"fig09": {"panels": [{"curves": [{"damper": "tmd", "mu": 0.01, "e": 0.5}]}]}}}, "'damper'"),
     ({"protocol": {"periods": 10, "average_from": 20}}, "protocol.average_from"),
+    # a new user's two: Table 1's numbers of units without 1, and a NaN that bounds let through
+    ({"robustness": {"units": [2, 4]}}, "'units'"),
+    ({"structure": {"beta": float("nan")}}, "structure.beta = nan"),
 ])
 def test_invalid_config_fails_at_parse_time_naming_the_key(tmp_path, patch, key):
     import yaml
@@ -336,6 +339,16 @@ def test_invalid_config_fails_at_parse_time_naming_the_key(tmp_path, patch, key)
     text = proc.stdout + proc.stderr
     assert key in text, text[-2000:]
     assert "Job stats" not in text  # refused before any job was planned
+
+
+def test_a_misspelt_key_is_named_in_a_few_lines(tmp_path):
+    """Not the whole schema after it (two thousand lines): the key, what is wrong, where."""
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("protocl: {periods: 10}\n")
+    proc = _snakemake(ROOT, "-n", "--configfile", "config/smoke.yaml", str(bad), check=False)
+    text = proc.stdout + proc.stderr
+    assert proc.returncode != 0 and "'protocl' was unexpected" in text
+    assert len(text.splitlines()) < 20, text
 
 
 def test_lint_is_clean():

@@ -10,6 +10,7 @@ import os
 import re
 import shutil
 import subprocess
+import sys
 from html.parser import HTMLParser
 from pathlib import Path
 
@@ -377,6 +378,26 @@ def test_report_loads_in_headless_chromium_without_errors(results, tmp_path):
     data = shot.read_bytes()
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
     assert report._png_size(data) == (1280, 2000)
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (apt-get install chromium; `make test` "
+                                             "installs it when run as root)")
+@pytest.mark.parametrize("section", ["loads", "ida_s3_T0.5"])
+def test_a_screenshot_shows_its_section_even_with_a_dot_in_its_id(section, tmp_path):
+    """make screenshots shows each section alone: one whose id holds a dot (the IDA's, coexistence's) too."""
+    sys.path.insert(0, str(ROOT / "tools"))
+    from screenshots import alone_page
+
+    page = ("<html><head><title>t</title></head><body><header>h</header><main>"
+            '<section id="loads"><h2>a</h2><p>loads</p></section>'
+            '<section id="ida_s3_T0.5"><h2>b</h2><p>ida</p></section></main>'
+            "<pre id=\"shown\"></pre><script>document.getElementById('shown').textContent = "
+            "[...document.querySelectorAll('section')].filter(s => getComputedStyle(s).display !== 'none')"
+            ".map(s => s.id).join(',');</script></body></html>")
+    probe = tmp_path / "alone.html"
+    probe.write_text(alone_page(page, section), encoding="ascii")
+    proc = _chromium(["--dump-dom", probe.as_uri()], tmp_path / "chromium-profile")
+    assert re.search(r'<pre id="shown">(.*?)</pre>', proc.stdout).group(1) == section
 
 
 class _Named(dict):

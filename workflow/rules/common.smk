@@ -4,6 +4,8 @@ import os
 import re
 
 import yaml
+from jsonschema import ValidationError
+from snakemake.exceptions import WorkflowError
 from snakemake.utils import validate
 
 from impact.stages import tables as comparison
@@ -24,7 +26,30 @@ from impact.stages.robustness.designs import design_names
 from impact.stages.sweeps import all_curves, check_config, figure_curves, friction_scale
 from impact.model.params import curve_id
 
+
+def validate_naming_the_key(config, schema):
+    """The schema's check, with its error as one line naming the key and what is wrong (Snakemake's own
+    message prints the whole schema after it: two thousand lines for a misspelt key)."""
+    try:
+        validate(config, schema)
+    except WorkflowError as exc:
+        error = exc.__context__  # the schema's error, which Snakemake raised its own while handling
+        if not isinstance(error, ValidationError):
+            raise
+        where = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in error.absolute_path)
+        about = error.schema.get("description") if isinstance(error.schema, dict) else None
+        raise WorkflowError(
+            f"config {where.lstrip('.') or '(top level)'}: {error.message}"
+            + (f"\n  the key: {about}" if about and error.absolute_path else "")
+        ) from None
+
+
+validate_naming_the_key(config, os.path.join(workflow.current_basedir, "..", "schemas", "config.schema.yaml"))
 check_config(config)
+
+# the wildcard patterns of the damper kinds, from the model's registries: a new kind matches every rule
+ANY_KIND = "|".join(DAMPER_KINDS)
+WALLED_KIND = "|".join(IMPACT_KINDS)
 
 FIGURES = list(config["figures"])
 CURVES = all_curves(config)

@@ -10,7 +10,7 @@ rule design_sweep:
     benchmark:
         "results/benchmarks/design_sweep/{curve}.tsv"
     wildcard_constraints:
-        curve="(cid|pid)_[A-Za-z0-9_.]+",
+        curve=f"({WALLED_KIND})_[A-Za-z0-9_.]+",
     conda:
         ENV
     threads: 1
@@ -34,7 +34,7 @@ rule design_chart:
     benchmark:
         "results/benchmarks/design_chart/{kind}.tsv"
     wildcard_constraints:
-        kind="cid|pid|tmd",
+        kind=ANY_KIND,
     conda:
         ENV
     threads: 1

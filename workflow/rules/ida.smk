@@ -37,7 +37,7 @@ rule ida_damper:
         "results/benchmarks/ida_damper/{building}_{damper}.tsv"
     wildcard_constraints:
         building="s[0-9]+_T[0-9.]+",
-        damper="cid|pid|tmd",
+        damper=ANY_KIND,
     conda:
         ENV
     threads: 1

@@ -36,7 +36,7 @@ rule loads_damper:
         "results/benchmarks/loads_damper/{building}_{damper}.tsv"
     wildcard_constraints:
         building="s[0-9]+_T[0-9.]+",
-        damper="cid|pid|tmd",
+        damper=ANY_KIND,
     conda:
         ENV
     threads: 1

@@ -36,7 +36,7 @@ rule robustness_design:
     benchmark:
         "results/benchmarks/robustness_design/{design}.tsv"
     wildcard_constraints:
-        design="(cid|pid|tmd)[A-Za-z0-9_.]*",
+        design=f"({ANY_KIND})[A-Za-z0-9_.]*",
     conda:
         ENV
     threads: 1

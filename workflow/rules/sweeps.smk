@@ -10,7 +10,7 @@ rule sweep_curve:
     benchmark:
         "results/benchmarks/sweep_curve/{curve}.tsv"
     wildcard_constraints:
-        curve="(cid|pid)_[A-Za-z0-9_.]+",
+        curve=f"({WALLED_KIND})_[A-Za-z0-9_.]+",
     conda:
         ENV
     threads: 1

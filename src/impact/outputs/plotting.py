@@ -482,6 +482,7 @@ def plot_loads_reduction(datasets: dict, outputs) -> None:
     fig.legend(handles, labels, loc="outside lower center", ncol=len(labels), fontsize=8, frameon=False)
     fig.suptitle("Peak roof displacement with each damper over the bare building's (below 1: it helps; "
                  "solid: the larger mass ratio)", fontsize=10)
+    fig.supylabel("peak roof displacement / the bare building's (each row: one building)", fontsize=9)
     for out in outputs:
         save_atomic(fig, out)
     plt.close(fig)

@@ -8,6 +8,8 @@ e = 0.25 is in Figs. 8, 9 and 11) is one file, computed once.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from impact.engine.paper import sweep
@@ -52,8 +54,22 @@ def freq_grid(cfg: dict) -> np.ndarray:
     return frequency_grid(f["min"], f["max"], f["step"])
 
 
+def non_finite_keys(node, where: str = "") -> list:
+    """The keys of a configuration holding NaN or an infinity (YAML's .nan, .inf), which a JSON schema's bounds
+    let through: every comparison with NaN is false."""
+    if isinstance(node, dict):
+        return [k for key, value in node.items() for k in non_finite_keys(value, f"{where}.{key}" if where else key)]
+    if isinstance(node, list):
+        return [k for i, value in enumerate(node) for k in non_finite_keys(value, f"{where}[{i}]")]
+    return [where] if isinstance(node, float) and not math.isfinite(node) else []
+
+
 def check_config(cfg: dict) -> None:
     """Checks a JSON schema cannot express; the message names the key."""
+    bad = non_finite_keys(cfg)
+    if bad:
+        raise ParameterError(f"{bad[0]} = {_at(cfg, bad[0])}: a finite number is needed"
+                             + (f" (and at {', '.join(bad[1:])})" if bad[1:] else ""))
     proto = cfg["protocol"]
     if proto["average_from"] >= proto["periods"]:
         raise ParameterError(f"protocol.average_from = {proto['average_from']} must be below "
@@ -69,6 +85,14 @@ def check_config(cfg: dict) -> None:
                     curve_system(cfg, spec, 1.0)
                 except ParameterError as exc:
                     raise ParameterError(f"{where}: {exc}") from None
+
+
+def _at(cfg: dict, where: str):
+    """The value at a key path of non_finite_keys's form (a.b[2].c)."""
+    node = cfg
+    for part in where.replace("[", ".[").split("."):
+        node = node[int(part[1:-1])] if part.startswith("[") else node[part]
+    return node
 
 
 def curve_system(cfg: dict, spec: dict, gap_ratio: float) -> System:

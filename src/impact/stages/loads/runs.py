@@ -13,6 +13,7 @@ from impact.model.building import Building
 from impact.model.scene import Damper, GroundMotion, Scene
 from impact.model.suites import record_by_key
 from impact.outputs.datasets import time_history_dataset
+from impact.outputs.labels import label
 from impact.stages.loads.plan import (
     IMPACT_RECORDS,
     RESPONSES,
@@ -139,7 +140,7 @@ def time_history(cfg: dict, building_name: str, record: str, kind: str, mass_rat
     plain = simulate_scene(Scene(building, (), load.load), times=times)
     damped = simulate_scene(Scene(building, (damper,), load.load), times=times, record=IMPACT_RECORDS)
     q = damped.samples["q"]
-    title = (f"Loads study: one case in time ({building_name}, {record} at {pga:g} g, "
+    title = (f"Loads study: one case in time ({label(building_name)}, {record} at {pga:g} g, "
              f"{kind.upper()} of {mass_ratio:g} of the mass, clearance {gap_ratio:g} x the bare peak roof displacement)")
     ds = time_history_dataset(times, q[:, roof], q[:, building.storeys] - q[:, roof], 0.5 * damper.gap,
                               damped.records["t"], damped.records["impulse"], length_unit="m", impulse_unit="N s",

@@ -9,7 +9,6 @@ bare structure (mu = 0) is its exact closed form.
 
 from __future__ import annotations
 
-import fcntl
 import math
 from collections import namedtuple
 from dataclasses import dataclass
@@ -21,7 +20,7 @@ from numba import njit
 from impact.engine import layout as L
 from impact.engine import paper_loop as K
 from impact.engine.contact import STICK_VELOCITY
-from impact.engine.jitcache import _cache_dir, purge_stale_cache
+from impact.engine.jitcache import compile_lock, purge_stale_cache
 from impact.engine.paper import ensure_compiled, initial_state, pid_data
 from impact.engine.paper import param_vector as model_param_vector
 from impact.engine.sampler import paper_free_flight, paper_state
@@ -318,21 +317,15 @@ _WARM = False  # the model sampler compiled (or loaded) in this process
 
 
 def warm_up_model():
-    """Compile (or load) the model sampler, under the simulator's JIT lock."""
+    """Compile (or load) the model sampler, under the engine's one compile lock."""
     global _WARM
     if _WARM:
         return
 
     ensure_compiled("pid")
-    folder = _cache_dir()
-    folder.mkdir(parents=True, exist_ok=True)
-    with open(folder / "impact-jit.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        try:
-            cfg = validation_config(None)
-            _run_model(cfg, Case(0.0129, 30.0, 1.0, "steel"), 1.0, np.array([0.0, 0.01]), forced=True)
-        finally:
-            fcntl.flock(lock, fcntl.LOCK_UN)
+    with compile_lock("experiment-model", "the virtual rig's model sampler"):
+        cfg = validation_config(None)
+        _run_model(cfg, Case(0.0129, 30.0, 1.0, "steel"), 1.0, np.array([0.0, 0.01]), forced=True)
     _WARM = True
 
 

@@ -1,0 +1,180 @@
+"""The scene engine on thousands of random scenes with a fresh seed: which promises break, how often, and how to
+reproduce each break.
+
+The scenes and the promises are the test suite's probe (``tests/probe.py``: uniform or uneven buildings, any gap
+and restitution, friction, harmonic, recorded, Kanai-Tajimi and wind loads; finished, finite, energy balanced, no
+unit through its wall, no dense sample above a certified peak), drawn wider (WIDE: up to 10 storeys, 4 dampers of
+up to 12 units, where the suite's stop at 4, 3 and 6).  The suite runs 300 fixed scenes in a minute; this script
+runs as many as asked, in worker processes with a time bound per scene, with a new seed unless one is given, so
+that it keeps finding what the fixed 300 cannot.
+
+    python tools/probe_scenes.py --scenes 3000                 # fresh seed, 2 workers
+    python tools/probe_scenes.py --scenes 3000 --seed 12345    # the same scenes again
+    python tools/probe_scenes.py --reproduce 12345 17          # one scene, in this process
+
+It prints, per class of break, how many scenes broke it and the worst few (seed and index, which is the
+reproducer: scene i of seed s is drawn from ``numpy.random.default_rng([s, i])``), and writes them all to
+``--out`` (JSON).  A scene that runs past ``--timeout`` seconds is a break of its own ("over the time bound").
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing
+import queue
+import secrets
+import sys
+import time
+from collections import defaultdict
+from pathlib import Path
+
+from impact import kernels
+
+kernels.apply()  # the study's kernels, before numpy loads here and in the workers, which inherit them
+
+import numpy as np  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+
+from probe import SAMPLES, draw_scene, violations  # noqa: E402 (the path above first)
+
+from impact.engine.run import simulate  # noqa: E402
+
+#: how far this probe draws (the suite's tests/probe.REACH stops at 4 storeys, 3 dampers, 6 units)
+WIDE = {"storeys": 10, "dampers": 4, "units": (1, 1, 2, 3, 4, 6, 9, 12)}
+
+
+def scene_of(seed: int, index: int):
+    return draw_scene(np.random.default_rng([seed, index]), reach=WIDE)
+
+
+def run_one(seed: int, index: int) -> dict:
+    """One scene's run: its breaks, its time, and what kind of scene it is."""
+    scene, scale = scene_of(seed, index)
+    started = time.perf_counter()
+    try:
+        horizon = scene.duration if scene.duration is not None else scene.load.duration
+        times = np.linspace(0.0, horizon, SAMPLES)
+        result = simulate(scene, measures=("amplitude", "impacts", "peaks", "samples"), times=times)
+        broke = violations(scene, scale, result)
+    except Exception as exc:  # noqa: BLE001 (a refusal or a crash is what the probe reports)
+        broke = [f"{type(exc).__name__}: {str(exc).splitlines()[0][:160]}"]
+    return {"seed": seed, "index": index, "seconds": time.perf_counter() - started, "broke": broke,
+            "storeys": scene.building.storeys, "dampers": [d.kind for d in scene.dampers],
+            "load": type(scene.load).__name__}
+
+
+def break_class(text: str) -> str:
+    """The class of a break: its words before the first number (the number is how far)."""
+    words = []
+    for word in text.split():
+        if any(ch.isdigit() for ch in word):
+            break
+        words.append(word)
+    return " ".join(words) or text
+
+
+def severity(text: str) -> float:
+    """How far a break went, where it says (its last number), for ranking the worst."""
+    for word in reversed(text.replace(",", " ").split()):
+        try:
+            return abs(float(word))
+        except ValueError:
+            continue
+    return float("inf")
+
+
+def _worker(seed: int, worker: int, tasks, results) -> None:
+    for index in iter(tasks.get, None):
+        results.put(("start", worker, index, time.monotonic()))
+        results.put(("done", worker, index, run_one(seed, index)))
+
+
+def probe(seed: int, scenes: int, workers: int, timeout: float) -> list[dict]:
+    """Every scene's run, in worker processes; a scene still running after `timeout` seconds is recorded as such
+    and its worker replaced (numba's compiled loop cannot be interrupted from inside)."""
+    ctx = multiprocessing.get_context("spawn")
+    tasks, results = ctx.Queue(), ctx.Queue()
+    for index in range(scenes):
+        tasks.put(index)
+    procs, running, done = {}, {}, []
+
+    def start(worker: int) -> None:
+        tasks.put(None)  # each worker stops at one None; one more for each worker started
+        procs[worker] = ctx.Process(target=_worker, args=(seed, worker, tasks, results), daemon=True)
+        procs[worker].start()
+
+    for worker in range(workers):
+        start(worker)
+    while len(done) < scenes:
+        try:
+            kind, worker, index, payload = results.get(timeout=1.0)
+            if kind == "start":
+                running[worker] = (index, payload)
+            else:
+                running.pop(worker, None)
+                done.append(payload)
+        except queue.Empty:
+            pass
+        for worker, (index, since) in list(running.items()):
+            if time.monotonic() - since > timeout:
+                procs[worker].kill()
+                running.pop(worker)
+                done.append({"seed": seed, "index": index, "seconds": timeout, "broke": [
+                    f"over the time bound of {timeout:g} s"], "storeys": None, "dampers": None, "load": None})
+                start(max(procs) + 1)
+    for proc in procs.values():
+        proc.kill()
+    return sorted(done, key=lambda r: r["index"])
+
+
+def summary(runs: list[dict], worst: int = 5) -> dict:
+    classes: dict = defaultdict(list)
+    for run in runs:
+        for text in run["broke"]:
+            classes[break_class(text)].append((severity(text), run["index"], text))
+    return {name: {"scenes": len(hits), "per_thousand": 1000.0 * len(hits) / len(runs),
+                   "worst": [{"index": i, "break": text} for _, i, text in sorted(hits, reverse=True)[:worst]]}
+            for name, hits in sorted(classes.items(), key=lambda kv: -len(kv[1]))}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--scenes", type=int, default=3000, help="how many random scenes (default 3000)")
+    ap.add_argument("--seed", type=int, default=None, help="the probe's seed (default: a fresh one, printed)")
+    ap.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+    ap.add_argument("--timeout", type=float, default=60.0, help="seconds one scene may run (default 60)")
+    ap.add_argument("--out", type=Path, default=Path("probe_scenes.json"), help="where the runs and classes go")
+    ap.add_argument("--reproduce", nargs=2, type=int, metavar=("SEED", "INDEX"), help="run one scene and print it")
+    args = ap.parse_args(argv)
+    if args.reproduce:
+        seed, index = args.reproduce
+        scene, scale = scene_of(seed, index)
+        print(scene, f"\nmotion scale {scale:.3g} m")
+        print(json.dumps(run_one(seed, index), indent=1))
+        return 0
+    seed = args.seed if args.seed is not None else secrets.randbits(32)
+    started = time.perf_counter()
+    runs = probe(seed, args.scenes, args.workers, args.timeout)
+    classes = summary(runs)
+    seconds = [r["seconds"] for r in runs]
+    report = {"seed": seed, "scenes": len(runs), "wall_seconds": time.perf_counter() - started,
+              "broken_scenes": sum(bool(r["broke"]) for r in runs), "classes": classes,
+              "slowest": sorted(({"index": r["index"], "seconds": r["seconds"]} for r in runs),
+                                key=lambda r: -r["seconds"])[:10],
+              "median_seconds": float(np.median(seconds)), "runs": runs}
+    args.out.write_text(json.dumps(report, indent=1) + "\n")
+    print(f"seed {seed}: {len(runs)} scenes, {report['broken_scenes']} broke a promise "
+          f"({report['wall_seconds']:.0f} s; reproduce one with --reproduce {seed} INDEX)")
+    for name, c in classes.items():
+        print(f"  {c['scenes']:5d} ({c['per_thousand']:.1f} per thousand)  {name}")
+        for w in c["worst"][:3]:
+            print(f"          scene {w['index']}: {w['break']}")
+    print(f"written to {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
