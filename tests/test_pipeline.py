@@ -318,12 +318,15 @@ def _rules_whose_params_changed(out: str) -> set[str]:
 
 
 @pytest.mark.parametrize("patch,key", [
-    ({"figures": {"fig09": {"panels": [{"curves": [{"damper": "cid", "mu": 0.01, "e": 1.5}]}]}}}, "'e'"),
-    ({"protocol": {"gap": {"min": -1.0, "max": 1.0, "step": 0.5}}}, "'min'"),
-    ({"figures": {"fig09": {"panels": [{"curves": [{"damper": "tmd", "mu": 0.01, "e": 0.5}]}]}}}, "'damper'"),
+    # the key's whole path, where the schema's own message named only its last part
+    ({"figures": {"fig09": {"panels": [{"curves": [{"damper": "cid", "mu": 0.01, "e": 1.5}]}]}}},
+     "figures.fig09.panels[0].curves[0].e: 1.5 is greater than the maximum of 1"),
+    ({"protocol": {"gap": {"min": -1.0, "max": 1.0, "step": 0.5}}}, "protocol.gap.min: -1.0 is less than"),
+    ({"figures": {"fig09": {"panels": [{"curves": [{"damper": "tmd", "mu": 0.01, "e": 0.5}]}]}}},
+     "figures.fig09.panels[0].curves[0].damper: 'tmd' is not one of"),
     ({"protocol": {"periods": 10, "average_from": 20}}, "protocol.average_from"),
     # a new user's two: Table 1's numbers of units without 1, and a NaN that bounds let through
-    ({"robustness": {"units": [2, 4]}}, "'units'"),
+    ({"robustness": {"units": [2, 4]}}, "robustness.units: [2, 4] does not contain"),
     ({"structure": {"beta": float("nan")}}, "structure.beta = nan"),
 ])
 def test_invalid_config_fails_at_parse_time_naming_the_key(tmp_path, patch, key):

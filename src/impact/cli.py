@@ -200,7 +200,7 @@ def _quake_record(args):
         except RecordError:
             if is_suite_key(args.record) or args.record.upper().endswith(".AT2"):
                 raise  # a known form whose record is wrong: its own message says what
-            raise RecordError(f"--record {args.record!r} is none of the forms it takes: {RECORD_FORMS}") from None
+            raise RecordError(f"--record {args.record!r}: unknown record; give {RECORD_FORMS}") from None
     parts = args.record.split(":")
     if len(parts) != 3 or not parts[2].isdigit():
         raise RecordError(f"--record {args.record!r}: write kanai-tajimi:SOIL:SEED, e.g. kanai-tajimi:firm:7")
