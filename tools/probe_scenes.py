@@ -22,7 +22,7 @@ from __future__ import annotations
 import argparse
 import json
 import multiprocessing
-import queue
+import multiprocessing.connection
 import secrets
 import sys
 import time
@@ -52,7 +52,11 @@ def scene_of(seed: int, index: int):
 
 def run_one(seed: int, index: int) -> dict:
     """One scene's run: its breaks, its time, and what kind of scene it is."""
-    scene, scale = scene_of(seed, index)
+    try:
+        scene, scale = scene_of(seed, index)
+    except Exception as exc:  # noqa: BLE001 (a drawn input the model refuses, by its checks)
+        return {"seed": seed, "index": index, "seconds": 0.0, "storeys": None, "dampers": None, "load": None,
+                "broke": [f"refused as drawn, {type(exc).__name__}: {str(exc).splitlines()[0][:160]}"]}
     started = time.perf_counter()
     try:
         horizon = scene.duration if scene.duration is not None else scene.load.duration
@@ -86,47 +90,61 @@ def severity(text: str) -> float:
     return float("inf")
 
 
-def _worker(seed: int, worker: int, tasks, results) -> None:
-    for index in iter(tasks.get, None):
-        results.put(("start", worker, index, time.monotonic()))
-        results.put(("done", worker, index, run_one(seed, index)))
+def _worker(seed: int, conn) -> None:
+    """Runs the scenes the probe sends, one at a time, answering each on its own pipe."""
+    for index in iter(conn.recv, None):
+        conn.send(run_one(seed, index))
+
+
+class _Worker:
+    """One worker process with a pipe of its own: no lock is shared with another worker, so killing one that
+    overran its time bound cannot leave the others waiting on a lock it held."""
+
+    def __init__(self, ctx, seed: int):
+        self.conn, theirs = ctx.Pipe()
+        self.proc = ctx.Process(target=_worker, args=(seed, theirs), daemon=True)
+        self.proc.start()
+        self.index, self.since = None, 0.0
+
+    def give(self, index: int) -> None:
+        self.index, self.since = index, time.monotonic()
+        self.conn.send(index)
+
+    def stop(self) -> None:
+        self.proc.kill()
+        self.proc.join()
 
 
 def probe(seed: int, scenes: int, workers: int, timeout: float) -> list[dict]:
     """Every scene's run, in worker processes; a scene still running after `timeout` seconds is recorded as such
     and its worker replaced (numba's compiled loop cannot be interrupted from inside)."""
     ctx = multiprocessing.get_context("spawn")
-    tasks, results = ctx.Queue(), ctx.Queue()
-    for index in range(scenes):
-        tasks.put(index)
-    procs, running, done = {}, {}, []
-
-    def start(worker: int) -> None:
-        tasks.put(None)  # each worker stops at one None; one more for each worker started
-        procs[worker] = ctx.Process(target=_worker, args=(seed, worker, tasks, results), daemon=True)
-        procs[worker].start()
-
-    for worker in range(workers):
-        start(worker)
+    todo = list(range(scenes - 1, -1, -1))
+    pool = [_Worker(ctx, seed) for _ in range(workers)]
+    done: list[dict] = []
+    for worker in pool:
+        worker.give(todo.pop())
     while len(done) < scenes:
-        try:
-            kind, worker, index, payload = results.get(timeout=1.0)
-            if kind == "start":
-                running[worker] = (index, payload)
-            else:
-                running.pop(worker, None)
-                done.append(payload)
-        except queue.Empty:
-            pass
-        for worker, (index, since) in list(running.items()):
-            if time.monotonic() - since > timeout:
-                procs[worker].kill()
-                running.pop(worker)
-                done.append({"seed": seed, "index": index, "seconds": timeout, "broke": [
-                    f"over the time bound of {timeout:g} s"], "storeys": None, "dampers": None, "load": None})
-                start(max(procs) + 1)
-    for proc in procs.values():
-        proc.kill()
+        ready = multiprocessing.connection.wait([w.conn for w in pool if w.index is not None], timeout=1.0)
+        for i, worker in enumerate(pool):
+            lost = None
+            if worker.conn in ready:
+                try:
+                    done.append(worker.conn.recv())
+                    worker.index = None
+                except EOFError:  # the worker died on this scene (a crash of the process itself)
+                    lost = f"the worker process died (exit code {worker.proc.exitcode})"
+            elif worker.index is not None and time.monotonic() - worker.since > timeout:
+                lost = f"over the time bound of {timeout:g} s"
+            if lost:
+                done.append({"seed": seed, "index": worker.index, "seconds": time.monotonic() - worker.since,
+                             "storeys": None, "dampers": None, "load": None, "broke": [lost]})
+                worker.stop()
+                pool[i] = worker = _Worker(ctx, seed)
+            if worker.index is None and todo:
+                worker.give(todo.pop())
+    for worker in pool:
+        worker.stop()
     return sorted(done, key=lambda r: r["index"])
 
 
