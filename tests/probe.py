@@ -26,8 +26,10 @@ PENETRATION_TOL = 1e-9   # beyond a wall, over the motion's scale
 SAMPLES = 4001           # dense output points per run for the peak check
 
 
-#: how far the suite's probe draws: up to 4 storeys, 3 dampers, 6 units a damper (tools/probe_scenes.py draws wider)
+#: how far the suite's probe draws: up to 4 storeys, 3 dampers, 6 units a damper
 REACH = {"storeys": 4, "dampers": 3, "units": (1, 1, 2, 3, 6)}
+#: how far the probe at scale (tools/probe_scenes.py) draws: up to 10 storeys, 4 dampers, 12 units
+WIDE = {"storeys": 10, "dampers": 4, "units": (1, 1, 2, 3, 4, 6, 9, 12)}
 
 
 def _building(rng, most_storeys: int) -> Building:

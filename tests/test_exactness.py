@@ -404,3 +404,25 @@ def test_identical_units_that_start_apart_and_fall_into_step_end_as_one_unit_of_
     np.testing.assert_allclose(many.final_q[:2], one.final_q, rtol=0, atol=1e-12 * gap)
     np.testing.assert_allclose(many.final_v[:2], one.final_v, rtol=0, atol=1e-12 * gap * omega)
     assert many.rms_roof_displacement == pytest.approx(one.rms_roof_displacement, rel=1e-12)
+
+
+#: scenes the probe at scale found breaking a promise (tools/probe_scenes.py, seed 3761029462, 3,000 scenes of up
+#: to 10 storeys, 4 dampers and 12 units, on 2026-11-26), each with the promise it broke: issue 42's open classes.
+#: Scene 650: nine elastic units and a CID with friction start on their walls, and 2,000 grazing events at t = 0
+#: stop it (the stall guard).  Scenes 2135 and 1232: a unit passes its wall by 5.9e-7 and 1.1e-7 of the motion's
+#: scale; in 1232 a dense sample of the roof lies 1.3e-7 above its certified peak.  Scene 2512: the energy
+#: balances to 1.7e-9 only.  Strict: the day a promise holds, its test fails, and the scene moves to the tests
+#: that hold.  (Seven more scenes ran past 60 s; they are too slow for the suite: the tool reproduces them.)
+AT_SCALE_SEED = 3761029462
+OPEN_AT_SCALE = {650: "event cap", 2135: "penetration", 1232: "sample above a certified peak",
+                 2512: "energy residual"}
+
+
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason="issue 42: a break the probe at scale found, open")
+@pytest.mark.parametrize("index, promise", sorted(OPEN_AT_SCALE.items()))
+def test_a_scene_the_probe_at_scale_found_keeps_its_promise(index, promise):
+    from probe import WIDE, draw_scene
+
+    scene, scale = draw_scene(np.random.default_rng([AT_SCALE_SEED, index]), reach=WIDE)
+    broken = [v for v in _probe_violations(scene, scale) if v.startswith(promise)]
+    assert broken == []

@@ -3,8 +3,8 @@ reproduce each break.
 
 The scenes and the promises are the test suite's probe (``tests/probe.py``: uniform or uneven buildings, any gap
 and restitution, friction, harmonic, recorded, Kanai-Tajimi and wind loads; finished, finite, energy balanced, no
-unit through its wall, no dense sample above a certified peak), drawn wider (WIDE: up to 10 storeys, 4 dampers of
-up to 12 units, where the suite's stop at 4, 3 and 6).  The suite runs 300 fixed scenes in a minute; this script
+unit through its wall, no dense sample above a certified peak), drawn wider (probe.WIDE: up to 10 storeys, 4 dampers
+of up to 12 units, where the suite's stop at 4, 3 and 6).  The suite runs 300 fixed scenes in a minute; this script
 runs as many as asked, in worker processes with a time bound per scene, with a new seed unless one is given, so
 that it keeps finding what the fixed 300 cannot.
 
@@ -38,12 +38,9 @@ import numpy as np  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from probe import SAMPLES, draw_scene, violations  # noqa: E402 (the path above first)
+from probe import SAMPLES, WIDE, draw_scene, violations  # noqa: E402 (the path above first)
 
 from impact.engine.run import simulate  # noqa: E402
-
-#: how far this probe draws (the suite's tests/probe.REACH stops at 4 storeys, 3 dampers, 6 units)
-WIDE = {"storeys": 10, "dampers": 4, "units": (1, 1, 2, 3, 4, 6, 9, 12)}
 
 
 def scene_of(seed: int, index: int):
@@ -59,8 +56,7 @@ def run_one(seed: int, index: int) -> dict:
                 "broke": [f"refused as drawn, {type(exc).__name__}: {str(exc).splitlines()[0][:160]}"]}
     started = time.perf_counter()
     try:
-        horizon = scene.duration if scene.duration is not None else scene.load.duration
-        times = np.linspace(0.0, horizon, SAMPLES)
+        times = np.linspace(0.0, scene.t_end, SAMPLES)
         result = simulate(scene, measures=("amplitude", "impacts", "peaks", "samples"), times=times)
         broke = violations(scene, scale, result)
     except Exception as exc:  # noqa: BLE001 (a refusal or a crash is what the probe reports)
