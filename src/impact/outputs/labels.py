@@ -12,6 +12,8 @@ from __future__ import annotations
 import math
 import re
 
+from impact.model.params import IMPACT_KINDS
+
 #: the status of a numerics run its time budget stopped (``failed: too slow ...``), which the figures mark
 TOO_SLOW = "too slow at this setting"
 
@@ -49,11 +51,12 @@ COLUMNS = {
 }
 
 _NUMBER = r"-?[0-9.]+(?:e-?[0-9]+)?"
-_CURVE = re.compile(rf"^(cid|pid)_mu({_NUMBER})_e({_NUMBER})(?:_rp({_NUMBER}))?(?:_nu({_NUMBER}))?"
+_WALLED = "|".join(IMPACT_KINDS)  # the damper kinds with walls, whose curves and designs the study names
+_CURVE = re.compile(rf"^({_WALLED})_mu({_NUMBER})_e({_NUMBER})(?:_rp({_NUMBER}))?(?:_nu({_NUMBER}))?"
                     rf"(?:_f({_NUMBER}))?(?:_L({_NUMBER}))?$")
 _BUILDING = re.compile(rf"^s(\d+)_T({_NUMBER})$")
 _RIG_CASE = re.compile(rf"^mu({_NUMBER})_d({_NUMBER})_rp({_NUMBER})_(\w+)$")
-_DESIGN = re.compile(rf"^(cid|pid)(?:_rp({_NUMBER}))?_(centre|left|right)$")
+_DESIGN = re.compile(rf"^({_WALLED})(?:_rp({_NUMBER}))?_(centre|left|right)$")
 _IVP = re.compile(r"^ivp_(\w+)$")
 
 
