@@ -103,3 +103,17 @@ def test_other_kernels_move_each_value_within_its_round_off_sensitivity(pinned):
         moved += theirs["value"] != ours["value"]
     # the kernel sets do round differently here: the test compares two different computations
     assert moved > 0
+
+
+def test_a_script_runs_under_the_pinned_sets(tmp_path):
+    """python -m impact.kernels SCRIPT ARGS: the script sees its arguments and computes with the pinned sets."""
+    script = tmp_path / "script.py"
+    script.write_text("import sys\nfrom impact import kernels\nimport numpy\n"
+                      "print(sys.argv[1:], kernels.pinned(), kernels.kernels())\n")
+    env = {k: v for k, v in os.environ.items() if k not in (OPENBLAS.variable, NUMPY.variable)}
+    proc = subprocess.run([sys.executable, "-m", "impact.kernels", str(script), "--quick"], env=env,
+                          capture_output=True, text=True, timeout=HANG_GUARD_S)
+    assert proc.returncode == 0, proc.stderr
+    if not kernels.pinned({}):
+        pytest.skip("this CPU does not run the pinned kernel sets")
+    assert proc.stdout.startswith(f"['--quick'] True numpy {NUMPY.value}; openblas {OPENBLAS.value}")

@@ -10,8 +10,9 @@ ones included (``docs/performance.md`` measures what that costs).
 
 A set is read once, when its library loads, so :func:`apply` must run before numpy is first imported in a
 process.  It does in the workflow (the Snakefile, before any job starts: jobs inherit the environment), the
-test run (``tests/conftest.py``) and the command line (``impact``'s entry, ``__main__.py``).  This module
-imports the standard library only, for that reason.
+test run (``tests/conftest.py``) and the command line (``impact``'s entry, ``__main__.py``); any other script
+runs under them as ``python -m impact.kernels SCRIPT [ARGS]`` (``make bench`` does).  This module imports the
+standard library only, for that reason.
 
 Each pin's ``override`` variable names another set for one run (``native`` leaves the choice to the library):
 the round-off ensemble of the smoke fingerprint (``tools/roundoff_ensemble.py``) and the benchmarks of this
@@ -22,6 +23,7 @@ from __future__ import annotations
 
 import os
 import platform
+import sys
 from typing import NamedTuple
 
 
@@ -102,3 +104,18 @@ def kernels() -> str:
     blas = sorted(f"{info['internal_api']} {info.get('architecture') or 'unknown'}"
                   for info in threadpool_info() if info.get("user_api") == "blas")
     return f"numpy {' '.join(loops) or 'baseline'}; {', '.join(blas) or 'no BLAS loaded'}"
+
+
+def run_script(argv: list[str]) -> None:
+    """Run a Python script (``argv[0]``, with its arguments) in this process under the study's kernel sets."""
+    import runpy
+
+    if not argv:
+        raise SystemExit("usage: python -m impact.kernels SCRIPT [ARGS]: runs SCRIPT under the study's kernel sets")
+    apply()
+    sys.argv = list(argv)
+    runpy.run_path(argv[0], run_name="__main__")
+
+
+if __name__ == "__main__":
+    run_script(sys.argv[1:])
