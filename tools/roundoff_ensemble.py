@@ -30,14 +30,13 @@ sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(ROOT / "src"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
+from reference import FINGERPRINT_FLOOR as FLOOR  # noqa: E402
 from reference import copy_workflow, smoke_digest  # noqa: E402
 from study_time import job_seconds, rule_stages  # noqa: E402
 
 from impact import kernels  # noqa: E402 (the paths above first)
 
 REFERENCE = ROOT / "tests" / "data" / "smoke_reference.json"
-#: the tolerance every entry has at least: the fingerprint's own round-off (sums of hundreds of values)
-FLOOR = 1e-9
 #: the pinned member, whose numbers the fingerprint holds
 PINNED = "pinned"
 OPENBLAS, NUMPY = kernels.PINS["openblas"].override, kernels.PINS["numpy"].override
@@ -51,16 +50,8 @@ MEMBERS = {
 }
 
 
-def _cpu_flags() -> set:
-    try:
-        text = Path("/proc/cpuinfo").read_text()
-    except OSError:
-        return set()
-    return set(next((line.split(":", 1)[1].split() for line in text.splitlines() if line.startswith("flags")), []))
-
-
 def runnable(name: str) -> bool:
-    return set(MEMBERS[name][1]) <= _cpu_flags()
+    return set(MEMBERS[name][1]) <= (kernels.cpu_flags() or set())
 
 
 def member_environment(name: str) -> dict:

@@ -48,16 +48,22 @@ NATIVE = "native"
 NEEDS = ("avx2", "fma", "bmi1", "bmi2", "f16c", "movbe", "abm")
 
 
-def _cpu_can_run_it(cpuinfo: str = "/proc/cpuinfo") -> bool:
-    """Whether this CPU runs the pinned kernels: x86-64 with NEEDS (assumed where /proc is absent)."""
-    if platform.machine().lower() not in ("x86_64", "amd64"):
-        return False
+def cpu_flags(cpuinfo: str = "/proc/cpuinfo") -> set | None:
+    """The CPU's feature flags (Linux's names in /proc/cpuinfo), or None where they cannot be read."""
     try:
         with open(cpuinfo, encoding="ascii", errors="replace") as handle:
             flags = next((line.split(":", 1)[1].split() for line in handle if line.startswith("flags")), None)
     except OSError:
-        return True
-    return flags is None or all(flag in flags for flag in NEEDS)
+        return None
+    return None if flags is None else set(flags)
+
+
+def _cpu_can_run_it(cpuinfo: str = "/proc/cpuinfo") -> bool:
+    """Whether this CPU runs the pinned kernels: x86-64 with NEEDS (assumed where its flags cannot be read)."""
+    if platform.machine().lower() not in ("x86_64", "amd64"):
+        return False
+    flags = cpu_flags(cpuinfo)
+    return flags is None or set(NEEDS) <= flags
 
 
 def chosen(environ=None) -> dict:
