@@ -32,6 +32,15 @@ UnitArrays = namedtuple("UnitArrays", "kind floor mass load gap restitution")
 #: the units' spring stiffness and dashpot (zero for a CID unit); absent when every unit is a CID
 SpringArrays = namedtuple("SpringArrays", "stiffness damping")
 
+#: the storeys of a building that yields (absent for an elastic one): one row per storey of the yield table.
+#: Its law: elastic stiffness k, hardening ratio b, yield drift d_y, P-delta's geometric stiffness P/h and the
+#: drift |u| at which the run stops as a collapse.  Its state, which the run advances and leaves as its result:
+#: the branch (layout.BRANCH_ELASTIC, or +1 / -1 yielding), the perfectly plastic element's offset p, the escape
+#: flags of its drift and drift-velocity searches, its next event (time, kind, side), its plastic work and its
+#: yield events
+YieldArrays = namedtuple("YieldArrays", "stiffness hardening yield_drift geometric limit branch offset escape escape_v "
+                                        "ev_t ev_kind ev_side plastic yields")
+
 #: what the run certifies peaks of: rows over the degrees of freedom, kind (layout.MON_*),
 #: the record's coefficient (an absolute acceleration) and a cap the peak cannot pass
 MonitorArrays = namedtuple("MonitorArrays", "rows kind record_coef cap")
@@ -52,8 +61,8 @@ RunState = namedtuple("RunState", "mode side sigma offset escape escape_v check 
 
 #: eigen-data of configurations, one slot each (segment.config_slot): configuration key, reduced size,
 #: eigenvalues, eigenvectors and inverse, K^-1, reduced damping, full index of each reduced
-#: degree of freedom, reduced load, and the harmonic particular solution per unit load
-ConfigCache = namedtuple("ConfigCache", "key size lam vec vinv kinv damping dof load forced")
+#: degree of freedom, reduced load, the harmonic particular solution per unit load, and the reduced masses
+ConfigCache = namedtuple("ConfigCache", "key size lam vec vinv kinv damping dof load forced mass")
 
 #: per-slot modal tables (modal.modal_slot): key, viscous quadratic form, the load's work per mode,
 #: each monitor's modal coefficients and curvature bound
@@ -88,9 +97,9 @@ Workspace = namedtuple("Workspace", "seg rows vecs events tables")
 
 #: what the steps at an event's instant (resolve_events, settle, _record_impacts) work in beside the run's
 #: state: the per-segment steps' SegmentWork (settle builds segments and contact rows in it), the cache's
-#: cursor, the events and the velocities before them.  These steps are compiled calls, not inlined, and
-#: each array of their arguments is copied in on every event
-InstantScratch = namedtuple("InstantScratch", "seg_work cursor events v_before")
+#: cursor, the events and the velocities before them, and the run's impact records and diagnostics.  These
+#: steps are compiled calls, not inlined, and each array of their arguments is copied in on every event
+InstantScratch = namedtuple("InstantScratch", "seg_work cursor events v_before recs diag")
 
 
 @structref.register

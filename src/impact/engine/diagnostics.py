@@ -10,14 +10,15 @@ from impact.engine import layout as L
 
 
 def energy_balance(work: float, viscous: float, impact_losses: float, friction: float, e0: float, e1: float,
-                   e_max: float) -> dict:
+                   e_max: float, plastic: float = 0.0) -> dict:
     """A run's energy terms and the residual of its balance, work - losses - (E1 - E0).
 
     The residual is normalised by the largest energy in play (the work, the losses or the most the run
     stored), so that a run that stores far more than it exchanges (no damping, a mass started at a far
-    wall) is judged on the right scale.
+    wall) is judged on the right scale.  plastic: a yielding building's plastic work, a loss like the others
+    (its own measure is StoreyResponse.plastic_work, so an elastic run's keys are what they were).
     """
-    losses = viscous + impact_losses + friction
+    losses = viscous + impact_losses + friction + plastic
     residual = work - losses - (e1 - e0)
     scale = max(abs(work), losses, e_max, 1e-300)
     return {"energy_residual": float(residual / scale), "work_input": float(work),
@@ -45,5 +46,5 @@ def read_diagnostics(diag) -> dict:
     out = {name: kind(diag[index]) for name, index, kind in _DIAGNOSTIC_FIELDS}
     out["max_penetration"] = float(max(diag[L.D_PEN], 0.0))
     out.update(energy_balance(diag[L.D_WORK], diag[L.D_VISC], diag[L.D_IMPLOSS], diag[L.D_FRICTION],
-                              diag[L.D_E0], diag[L.D_E1], diag[L.D_EMAX]))
+                              diag[L.D_E0], diag[L.D_E1], diag[L.D_EMAX], diag[L.D_PLASTIC]))
     return out

@@ -15,6 +15,9 @@ MODE_STUCK = 1    # resting against the wall on `side`, moving with its floor
 MODE_LOCKED = 2   # gap d = 0: one body with its floor
 MODE_FLOOR = 3    # friction only: dragged along by the floor away from the walls
 
+# storey branches (a yielding building's storeys): elastic, or yielding with the drift growing (+1) or falling (-1)
+BRANCH_ELASTIC = 0
+
 # scalar parameters (float64 vector)
 P_T0, P_TEND, P_TWIN, P_VSTICK, P_MAXEV, P_PERIOD = 0, 1, 2, 3, 4, 5
 P_OMEGA, P_PHI, P_F0 = 6, 7, 8          # harmonic load F0 sin(Omega t + phi)
@@ -31,7 +34,9 @@ D_WORK, D_VISC, D_IMPLOSS, D_E0, D_E1 = 5, 6, 7, 8, 9
 D_CAP, D_NREC, D_STEPS, D_STUCKTIME, D_TEND = 10, 11, 12, 13, 14
 D_FRICTION, D_SEGMENTS, D_SIMULTANEOUS, D_EMAX, D_PEAK_GAVE_UP = 15, 16, 17, 18, 19
 D_X2WIN = 20  # the paper loop's integral of x^2 over the window (its amplitude)
-NDIAG = 21
+# a yielding building's: the plastic work, the yield events, and whether a storey's drift passed its collapse limit
+D_PLASTIC, D_YIELDS, D_COLLAPSE = 21, 22, 23
+NDIAG = 24
 
 # impact record columns: their names in order, and each one's index.  x: the displacement of the unit's
 # floor; v, w: the floor's and the unit's velocities before (minus) and after (plus); stuck: whether the wall

@@ -125,8 +125,11 @@ def _reduced_index(s, fidx, nf, units, mode, red):
 
 
 @njit(cache=True)
-def modal_slot(s, key, cache, nf, units, mode, mon_rows, mon_kind, mtab):
-    """Fill slot s of the modal tables for configuration `key` (a no-op when they are current)."""
+def modal_slot(s, key, cache, nf, units, mode, mon_rows, mon_kind, mtab, growth):
+    """Fill slot s of the modal tables for configuration `key` (a no-op when they are current).
+
+    growth: the most a growing mode's exponential (Re kap > 0: a storey whose P-delta outweighs its stiffness)
+    can reach over a segment, which the run keeps short enough (scene_loop.growth_rate); 1 when none grows."""
     mkey, gvis, lmod, mvec, mbnd = mtab
     if mkey[s] == key:
         return
@@ -162,6 +165,8 @@ def modal_slot(s, key, cache, nf, units, mode, mon_rows, mon_kind, mtab):
                 acc *= lam[s, k] * lam[s, k]
             mvec[s, m, k] = acc
             mbnd[s, m, k] = abs(acc) * abs(lam[s, k]) ** 2
+            if lam[s, k].real > 0.0:
+                mbnd[s, m, k] *= growth
     mkey[s] = key
 
 

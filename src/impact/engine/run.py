@@ -51,6 +51,8 @@ def as_paper_system(scene: Scene) -> System | None:
     :func:`impact.model.scene.paper_scene_from_system` runs exactly the System it was built from.
     """
     b = scene.building
+    if not b.is_elastic:
+        return None  # the paper loop's storey is linear
     if b.storeys != 1 or b.masses[0] != 1.0 or b.storey_stiffness[0] != 1.0 or len(scene.dampers) != 1:
         return None
     d = scene.dampers[0]

@@ -9,8 +9,15 @@ Arrays travel in the named bundles of :mod:`impact.engine.bundles`; the steps
 inlined on every segment take one structref of them, SegmentWork (see that
 module on why).  Optional parts arrive as their own arguments, None when
 absent, and numba prunes them at compile time: `springs` (PID and TMD units),
-`fric` (Coulomb friction under CID units), `harm` (a harmonic load) and
-`record` (a piecewise-linear load record).
+`fric` (Coulomb friction under CID units), `harm` (a harmonic load),
+`record` (a piecewise-linear load record) and `yld` (storeys that yield).
+
+The events are the rows of two tables: each damper unit's (its walls, its
+slide on the floor, its release from a wall) and each yielding storey's (its
+drift reaching the yield surface or the collapse limit, its drift velocity
+turning on a yielding branch).  Every row is searched on the same segment by
+the same certified search (events.first_exit); the earliest event of either
+table ends the segment, and every event at that instant is applied.
 """
 
 from __future__ import annotations
@@ -36,7 +43,9 @@ from impact.engine.contact import floor_decision, floor_mass, floor_row, plastic
 from impact.engine.events import PEAK_RTOL, first_exit, peak_abs
 from impact.engine.jitcache import ENGINE_CACHE, purge_stale_cache
 from impact.engine.layout import (
+    BRANCH_ELASTIC,
     D_CAP,
+    D_COLLAPSE,
     D_E0,
     D_E1,
     D_EMAX,
@@ -48,6 +57,7 @@ from impact.engine.layout import (
     D_NREC,
     D_PEAK_GAVE_UP,
     D_PEN,
+    D_PLASTIC,
     D_SEGMENTS,
     D_SIMULTANEOUS,
     D_STEPS,
@@ -56,6 +66,7 @@ from impact.engine.layout import (
     D_TEND,
     D_VISC,
     D_WORK,
+    D_YIELDS,
     KIND_PID,
     KIND_TMD,
     MODE_FLOOR,
@@ -103,7 +114,6 @@ from impact.engine.segment import (
     bound,
     bound_tab,
     build_segment,
-    config_key,
     config_slot,
     deriv_at0,
     derivative_row,
@@ -112,10 +122,13 @@ from impact.engine.segment import (
     integral_tables,
     kappa_powers,
     same_unit,
+    scene_key,
     state_from_exp,
+    storey_drift,
 )
 
 EV_NONE, EV_WALL, EV_SLIDE_STOP, EV_RELEASE, EV_FLOOR_EXIT = 0, 1, 2, 3, 4
+EV_YIELD, EV_UNLOAD, EV_COLLAPSE = 5, 6, 7  # a storey's: the yield surface, its drift turning, the collapse limit
 _TOL = 1e-12  # contact tolerance, relative to the size of the gap function
 _ROUND_TOL = 1e-13  # 450 eps: the round-off of a difference of rows, relative to their terms' size
 STALL_EVENTS, STALL_SPAN = 1000, 1e-9  # this many events within this fraction of a period: no progress
@@ -333,6 +346,197 @@ def search_events(w, nf, units, springs, fric, tau_max, r0, r1, ek_tau):
         if ev_t[j] < found:
             found = ev_t[j]
     return found
+
+
+@njit(cache=True, inline='always')
+def _drift_row(C, P, i, cs, ps):
+    """Storey i's drift row (its floor's row less the one below, or the floor's own for the first storey) into cs,
+    ps; returns the size of the lower floor's terms at tau = 0, on which the difference is rounded (as _gap_row)."""
+    size = 0.0
+    for k in range(C.shape[1]):
+        cs[k] = C[i, k]
+    for k in range(NPOLY):
+        ps[k] = P[i, k]
+    if i > 0:
+        size = abs(P[i - 1, 0])
+        for k in range(C.shape[1]):
+            cb = C[i - 1, k]
+            cs[k] -= cb
+            size += abs(cb.real) + abs(cb.imag)
+        for k in range(NPOLY):
+            ps[k] -= P[i - 1, k]
+    return size
+
+
+@njit(cache=True, inline='always')
+def _storey_event(out, horizon, yld, i, kind, side):
+    """Storey i's event found by a search (out) becomes its event if it comes first; returns the earliest time."""
+    if out[0] <= horizon and out[0] <= yld.ev_t[i]:
+        yld.ev_t[i] = out[0]
+        yld.ev_kind[i] = kind
+        yld.ev_side[i] = side
+        return out[0]
+    return horizon
+
+
+@njit(cache=True, inline='always')
+def search_storeys(w, yld, horizon):
+    """Next event of every storey of a yielding building, certified as a unit's; returns the earliest (inf if none
+    up to horizon, the earliest unit event or the segment's end).
+
+    An elastic storey's drift u stays within d_y of its plastic offset p (and within the collapse limit); a yielding
+    one's drift velocity keeps the branch's sign s (s u' >= 0) and its drift stays within the collapse limit.
+    """
+    kap, C, P, kpow, wt, diag = w.kap, w.C, w.P, w.kpow, w.wt, w.diag
+    cs, ps, cq, pq, out = w.cs, w.ps, w.cq, w.pq, w.found
+    branch, dy, limit, offset = yld.branch, yld.yield_drift, yld.limit, yld.offset
+    found = np.inf
+    for i in range(branch.shape[0]):
+        yld.ev_t[i] = np.inf
+        yld.ev_kind[i] = EV_NONE
+        size = _drift_row(C, P, i, cs, ps)
+        halve_from_start(kap, cs, ps, wt)
+        lim = limit[i]
+        out[2] = 0.0
+        out[3] = 0.0
+        if branch[i] == BRANCH_ELASTIC:
+            lo = max(offset[i] - dy[i], -lim)
+            hi = min(offset[i] + dy[i], lim)
+            if hi - lo < np.inf:
+                delta = _contact_tol(hi - lo, bound_tab(kpow, cs, ps, 0, 0.0), size)
+                first_exit(kap, kpow, cs, ps, lo, hi, horizon, yld.escape[i], delta, out)
+                side = 1 if out[1] > 0.0 else -1
+                at_limit = hi == lim if side > 0 else lo == -lim
+                horizon = _storey_event(out, horizon, yld, i, EV_COLLAPSE if at_limit else EV_YIELD, side)
+        else:
+            sign = branch[i]
+            derivative_row(kap, cs, ps, cq, pq)
+            for k in range(kap.shape[0]):
+                cq[k] = sign * cq[k]
+            for k in range(NPOLY):
+                pq[k] = sign * pq[k]
+            dv = _TOL * bound_tab(kpow, cq, pq, 0, 0.0)
+            first_exit(kap, kpow, cq, pq, 0.0, np.inf, horizon, yld.escape_v[i], dv, out)
+            horizon = _storey_event(out, horizon, yld, i, EV_UNLOAD, sign)
+            if lim < np.inf:
+                diag[D_STEPS] += out[3]
+                diag[D_GRAZE] += out[2]
+                out[2] = 0.0
+                out[3] = 0.0
+                delta = _contact_tol(2.0 * lim, bound_tab(kpow, cs, ps, 0, 0.0), size)
+                first_exit(kap, kpow, cs, ps, -lim, lim, horizon, 0, delta, out)
+                horizon = _storey_event(out, horizon, yld, i, EV_COLLAPSE, 1 if out[1] > 0.0 else -1)
+        diag[D_GRAZE] += out[2]
+        diag[D_STEPS] += out[3]
+        found = min(found, yld.ev_t[i])
+    return found
+
+
+@njit(cache=True)
+def resolve_storeys(tau_ev, yld, q, v, diag):
+    """Apply every storey's event at this instant (tau_ev into the segment): a storey reaching its yield surface
+    moving outward yields (its offset set so that u - p is exactly s d_y); a yielding storey whose drift turns
+    unloads elastically from the surface; a drift at the collapse limit ends the run (diag[D_COLLAPSE])."""
+    branch, dy, offset, escape = yld.branch, yld.yield_drift, yld.offset, yld.escape
+    limit = tau_ev * (1.0 + 16.0 * 2.220446049250313e-16) + 1e-300
+    for i in range(branch.shape[0]):
+        if not yld.ev_t[i] <= limit:
+            continue
+        kind = yld.ev_kind[i]
+        side = yld.ev_side[i]
+        u = storey_drift(q, i)
+        if kind == EV_COLLAPSE:
+            diag[D_COLLAPSE] = 1.0
+        elif kind == EV_YIELD:
+            if side * storey_drift(v, i) > 0.0:
+                branch[i] = side
+                offset[i] = u - side * dy[i]
+                yld.yields[i] += 1
+                diag[D_YIELDS] += 1.0
+            else:
+                escape[i] = side  # a touch of the surface while turning back: it stays elastic and leaves it
+        elif kind == EV_UNLOAD:
+            _unload(yld, i, u)
+
+
+@njit(cache=True, inline='always')
+def _unload(yld, i, u):
+    side = yld.branch[i]
+    yld.branch[i] = BRANCH_ELASTIC
+    yld.offset[i] = u - side * yld.yield_drift[i]
+    yld.escape[i] = side
+
+
+@njit(cache=True)
+def storey_jumps(yld, q, v, diag):
+    """After an impulse (the floors' velocities jumped): a yielding storey now moving inward unloads, and an elastic
+    storey on its yield surface now moving outward yields."""
+    branch, dy, offset = yld.branch, yld.yield_drift, yld.offset
+    for i in range(branch.shape[0]):
+        u = storey_drift(q, i)
+        du = storey_drift(v, i)
+        if branch[i] != BRANCH_ELASTIC:
+            if branch[i] * du < 0.0:
+                _unload(yld, i, u)
+        elif yld.escape[i] != 0 and yld.escape[i] * du > 0.0 and _on_surface(yld, i, q):
+            side = yld.escape[i]
+            branch[i] = side
+            offset[i] = u - side * dy[i]
+            yld.escape[i] = 0
+            yld.yields[i] += 1
+            diag[D_YIELDS] += 1.0
+
+
+@njit(cache=True, inline='always')
+def _on_surface(yld, i, q):
+    """Storey i's elastic drift on the yield surface it left (yld.escape), to the contact tolerance of its floors."""
+    u = storey_drift(q, i)
+    lower = abs(q[i - 1]) if i > 0 else 0.0
+    return abs(u - yld.offset[i] - yld.escape[i] * yld.yield_drift[i]) <= _TOL * (yld.yield_drift[i] + abs(q[i])
+                                                                                    + lower)
+
+
+@njit(cache=True, inline='always')
+def storeys_after_segment(yld, q, v):
+    """A storey that left its yield surface keeps its escape only while it is still on it and not moving back out
+    (as a unit leaving a wall, _still_leaving); the drift-velocity searches start afresh."""
+    for i in range(yld.branch.shape[0]):
+        if yld.escape[i] != 0 and not (_on_surface(yld, i, q) and yld.escape[i] * storey_drift(v, i) <= 0.0):
+            yld.escape[i] = 0
+        yld.escape_v[i] = 0
+
+
+@njit(cache=True, inline='always')
+def plastic_flow(yld, q, diag):
+    """A yielding storey's offset follows its drift (u - p = s d_y), and the perfectly plastic element's force
+    s (1 - b) k d_y does the plastic work (1 - b) k d_y |dp|, exact since s u' >= 0 all along the segment."""
+    branch, dy, offset = yld.branch, yld.yield_drift, yld.offset
+    for i in range(branch.shape[0]):
+        if branch[i] != BRANCH_ELASTIC:
+            p_new = storey_drift(q, i) - branch[i] * dy[i]
+            work = (1.0 - yld.hardening[i]) * yld.stiffness[i] * dy[i] * branch[i] * (p_new - offset[i])
+            yld.plastic[i] += work
+            diag[D_PLASTIC] += work
+            offset[i] = p_new
+
+
+@njit(cache=True, inline='always')
+def growth_rate(cache, s):
+    """The largest Re kap of slot s's modes when one grows (a storey whose P-delta outweighs its stiffness), else 0:
+    the run keeps such a segment within 1 / rate, over which every exponential stays within e of its start."""
+    rate = 0.0
+    for k in range(2 * cache.size[s]):
+        rate = max(rate, cache.lam[s, k].real)
+    return rate
+
+
+@njit(cache=True, inline='always')
+def grow_powers(kap, kpow):
+    """|kap|^n times e for a growing mode: bound_tab's bounds over a segment within 1 / growth_rate."""
+    for k in range(kap.shape[0]):
+        if kap[k].real > 0.0:
+            for n in range(kpow.shape[0]):
+                kpow[n, k] *= math.e
 
 
 @njit(cache=True, inline='always')
@@ -581,7 +785,7 @@ def plastic_merge(j, building, units, mode, v, diag):
 
 
 @njit(cache=True)
-def settle(t, model, springs, fric, harm, record, st, scratch, diag):
+def settle(t, model, springs, fric, harm, record, yld, st, scratch):
     """Decide, at one instant, which units the walls or the floor keep holding.
 
     st.check[j]: 1 a unit that just rebounded (is its rebound resolvable?), 2 a
@@ -593,7 +797,7 @@ def settle(t, model, springs, fric, harm, record, st, scratch, diag):
                                                              st.escape_v, st.check, st.v)
     w = scratch.seg_work
     kap, C, P, cs, ps, cq, pq, cache = w.kap, w.C, w.P, w.cs, w.ps, w.cq, w.pq, w.cache
-    cursor = scratch.cursor
+    cursor, diag = scratch.cursor, scratch.diag
     ufloor, um, uload, ud = units.floor, units.mass, units.load, units.gap
     nf = building.mass.shape[0]
     nu = um.shape[0]
@@ -606,8 +810,9 @@ def settle(t, model, springs, fric, harm, record, st, scratch, diag):
     if harm is not None:
         theta0 = omega * t + p[P_PHI]
     for _ in range(2 * nu + 2):
-        s = config_slot(building, units, springs, load_vec, omega if harm is not None else 0.0, mode, cache, cursor)
-        build_segment(w, s, units, springs, fric, harm is not None, (theta0, r0, r1), omega)
+        s = config_slot(building, units, springs, yld, load_vec, omega if harm is not None else 0.0, mode, cache,
+                        cursor)
+        build_segment(w, s, units, springs, fric, yld, harm is not None, (theta0, r0, r1), omega)
         # every unit is judged on the same segment, so identical units decide alike
         changed = False
         for j in range(nu):
@@ -856,8 +1061,8 @@ def integrate_energy(w, s, n, tau, building, units, springs, harm, record, load_
 
 
 @njit(cache=True, inline='always')
-def move_to_end(w, building, units, springs, fric, tau):
-    """The state at the segment's end, the friction work on the way, and the largest stored energy."""
+def move_to_end(w, building, units, springs, fric, yld, tau):
+    """The state at the segment's end, the friction and plastic work on the way, and the largest stored energy."""
     mode, sigma, kap, ek, C, P, q, v = w.mode, w.sigma, w.kap, w.ek, w.C, w.P, w.q, w.v
     s_before, diag = w.s_before, w.diag
     nf = building.mass.shape[0]
@@ -872,7 +1077,9 @@ def move_to_end(w, building, units, springs, fric, tau):
                 # s' keeps its sign on a sliding segment: the work is exact
                 slid = q[nf + j] - q[ufloor[j]] - s_before[j]
                 diag[D_FRICTION] += units.mass[j] * fric[j] * sigma[j] * slid
-    e_now = energy(building, units, springs, nf, q, v)
+    if yld is not None:
+        plastic_flow(yld, q, diag)
+    e_now = energy(building, units, springs, yld, nf, q, v)
     if e_now > diag[D_EMAX]:
         diag[D_EMAX] = e_now
 
@@ -899,35 +1106,40 @@ def event_cap_reached(t, p, clock):
 
 
 @njit(cache=True)
-def handle_events(t, tau, model, springs, fric, harm, record, st, scratch, out):
-    """Apply the events found at t, settle the contacts they leave and record the impacts."""
-    p, diag = model.p, out.diag
+def handle_events(t, tau, model, springs, fric, harm, record, yld, st, scratch):
+    """Apply the events found at t (the units' and the storeys'), settle the contacts they leave and record the
+    impacts."""
+    p, diag = model.p, scratch.diag
     v, v_before = st.v, scratch.v_before
     for i in range(v.shape[0]):
         v_before[i] = v[i]
     n_hit = resolve_events(tau, model.building, model.units, fric, st, scratch.events, p[P_VSTICK], diag)
+    if yld is not None:
+        resolve_storeys(tau, yld, st.q, st.v, diag)
+        if n_hit > 0:
+            storey_jumps(yld, st.q, st.v, diag)
     if n_hit > 0:
         diag[D_IMPACTS] += n_hit
         if t >= p[P_TWIN]:
             diag[D_IMPACTS_WIN] += n_hit
         if n_hit > 1:
             diag[D_SIMULTANEOUS] += 1.0
-    settle(t, model, springs, fric, harm, record, st, scratch, diag)
+    settle(t, model, springs, fric, harm, record, yld, st, scratch)
     if n_hit > 0:
-        _record_impacts(t, model.units, st, scratch.events, v_before, out.recs, diag)
+        _record_impacts(t, model.units, st, scratch.events, v_before, scratch.recs, diag)
 
 
 @njit(cache=True)
-def _start(t, model, springs, fric, harm, record, st, scratch, out):
+def _start(t, model, springs, fric, harm, record, yld, st, scratch, out):
     """The state a run starts from: contacts decided by the walls, diagnostics and monitors zeroed."""
     diag = out.diag
     for i in range(NDIAG):
         diag[i] = 0.0
     _initial_units(model.units, fric, st)
-    settle(t, model, springs, fric, harm, record, st, scratch, diag)
+    settle(t, model, springs, fric, harm, record, yld, st, scratch)
     nf = model.building.mass.shape[0]
     diag[D_STICKS] = 0.0  # a unit placed on a wall is not a sticking episode
-    diag[D_E0] = energy(model.building, model.units, springs, nf, st.q, st.v)
+    diag[D_E0] = energy(model.building, model.units, springs, yld, nf, st.q, st.v)
     diag[D_EMAX] = diag[D_E0]
     for m in range(out.peak.shape[0]):
         out.peak[m] = 0.0
@@ -936,13 +1148,14 @@ def _start(t, model, springs, fric, harm, record, st, scratch, out):
 
 
 @njit(cache=True)
-def run_scene(model, springs, fric, harm, record, start, cache, out):
+def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
     """One run from p[P_T0] to p[P_TEND], its results written into out (bundles.RunOutputs); returns the number
     of impact records written.
 
     model: bundles.SceneArrays; start: bundles.StartState, with every unit's initial contact state (the
     walls decide at once whether they hold a unit placed against them); cache: a bundles.ConfigCache
-    that the run fills.
+    that the run fills; yld: a yielding building's bundles.YieldArrays (None for an elastic one), whose state
+    the run advances from where it is and leaves as its result.
     """
     p, building, units, load_vec, monitors = model
     nf = building.mass.shape[0]
@@ -964,10 +1177,10 @@ def run_scene(model, springs, fric, harm, record, start, cache, out):
     w = SegmentWork(kap, C, P, ek, pair, single, kpow, cs, ps, cq, pq, cm, pm, cv, pv, cu, pu, stack, found, cu1, aw,
                     s_before, wt, ev_t, ev_side, ev_kind, work, mtab, cache, load_vec, mode, side, sigma, offset,
                     escape, escape_v, q, v, diag, mon_peak, mon_peak_t, mon_x2)
-    instant = InstantScratch(w, cursor, ws.events, ws.vecs.v_before)
+    instant = InstantScratch(w, cursor, ws.events, ws.vecs.v_before, out.recs, out.diag)
     t = p[P_T0]
     t_end = p[P_TEND]
-    _start(t, model, springs, fric, harm, record, st, instant, out)
+    _start(t, model, springs, fric, harm, record, yld, st, instant, out)
     its = 0  # the next sample time
     while its < ts.shape[0] and ts[its] < t:
         its += 1
@@ -979,18 +1192,27 @@ def run_scene(model, springs, fric, harm, record, start, cache, out):
     tab_key = -1
     tab_tau = -1.0
     s = 0
+    rate = 0.0  # the configuration's growth rate (growth_rate), 0 unless a storey's P-delta outweighs it
     omega = p[P_OMEGA]
     while t < t_end:
         r0, r1, theta0, t_next, tau_max = segment_load(p, record, harm, t, t_end)
-        key = config_key(mode)
+        key = scene_key(mode, yld)
         if key != slot_key:
-            s = config_slot(building, units, springs, load_vec, omega if harm is not None else 0.0, mode, cache,
+            s = config_slot(building, units, springs, yld, load_vec, omega if harm is not None else 0.0, mode, cache,
                             cursor)
-            modal_slot(s, key, cache, nf, units, mode, monitors.rows, monitors.kind, mtab)
+            if yld is not None:
+                rate = growth_rate(cache, s)
+            modal_slot(s, key, cache, nf, units, mode, monitors.rows, monitors.kind, mtab,
+                       math.e if rate > 0.0 else 1.0)
             slot_key = key
-        build_segment(w, s, units, springs, fric, harm is not None, (theta0, r0, r1), omega)
+        if rate > 0.0 and tau_max * rate > 1.0:
+            tau_max = 1.0 / rate
+            t_next = t + tau_max
+        build_segment(w, s, units, springs, fric, yld, harm is not None, (theta0, r0, r1), omega)
         if key != kpow_key:
             kappa_powers(kap, kpow)
+            if rate > 0.0:
+                grow_powers(kap, kpow)
             mode_weights(kap, wt)
             kpow_key = key
         if record is not None and (key != tab_key or tau_max != tab_tau):
@@ -1000,6 +1222,8 @@ def run_scene(model, springs, fric, harm, record, start, cache, out):
             tab_tau = tau_max
         diag[D_SEGMENTS] += 1.0
         best = search_events(w, nf, units, springs, fric, tau_max, r0, r1, tab_tau if key == tab_key else -1.0)
+        if yld is not None:
+            best = min(best, search_storeys(w, yld, min(best, tau_max)))
         event = best <= tau_max and best < np.inf
         tau = best if event else tau_max
         n = cache.size[s]
@@ -1009,26 +1233,34 @@ def run_scene(model, springs, fric, harm, record, start, cache, out):
             step_tables(s, key, tau, p[P_REC_DT] if record is not None else -1.0, kap, ek, pair, single, dtab)
             tab_key = key
             tab_tau = tau
-        integrate_energy(w, s, n, tau, building, units, springs, harm, record, (theta0, r0, r1))
+        if yld is None:
+            integrate_energy(w, s, n, tau, building, units, springs, harm, record, (theta0, r0, r1))
+        else:
+            # a zero mode's particular velocity is not constant, which the modal tables assume: the rows integrate
+            integrate_segment(w, tau, building, units, springs, harm, record, (theta0, r0, r1))
         monitor_modal(w, s, n, tau, t, p[P_TWIN], monitors, r0, r1, harm is not None)
         if its < ts.shape[0]:
             its = sample_segment(kap, C, P, t, tau, ts, its, samples, qs, vs)
-        move_to_end(w, building, units, springs, fric, tau)
+        move_to_end(w, building, units, springs, fric, yld, tau)
         t = t_next if not event else t + tau
         for j in range(nu):
             if escape[j] != 0 and not _still_leaving(j, nf, units, mode, escape, q, v):
                 escape[j] = 0
             escape_v[j] = 0
+        if yld is not None:
+            storeys_after_segment(yld, q, v)
         if not event:
             continue
         if event_cap_reached(t, p, clock):
             diag[D_CAP] = 1.0
             break
-        handle_events(t, tau, model, springs, fric, harm, record, st, instant, out)
+        handle_events(t, tau, model, springs, fric, harm, record, yld, st, instant)
+        if diag[D_COLLAPSE] != 0.0:
+            break
         slot_key = -1  # settle may have filled (and so replaced) cache slots
         tab_key = -1
         kpow_key = -1
-    diag[D_E1] = energy(building, units, springs, nf, q, v)
+    diag[D_E1] = energy(building, units, springs, yld, nf, q, v)
     diag[D_TEND] = t
     for i in range(nf + nu):
         out.q[i] = q[i]

@@ -24,6 +24,7 @@ from impact.engine.bundles import (
     SpringArrays,
     StartState,
     UnitArrays,
+    YieldArrays,
 )
 from impact.engine.contact import STICK_VELOCITY
 from impact.engine.diagnostics import read_diagnostics
@@ -59,9 +60,11 @@ class SceneResult:
     window_span: float = math.nan
     #: the engine's loop that ran (impact.engine.run.LOOPS); what it does not measure is NaN
     loop: str = "scene"
+    #: a yielding building's storeys (StoreyResponse); None for an elastic one
+    storeys: "StoreyResponse | None" = None
 
     def as_json(self, units: str = "m") -> dict:
-        return {
+        out = {
             f"peak_roof_displacement_{units}": self.peak_roof_displacement,
             f"rms_roof_displacement_{units}": self.rms_roof_displacement,
             f"peak_roof_acceleration_{units}s2": self.peak_roof_acceleration,
@@ -70,6 +73,36 @@ class SceneResult:
             "impacts": self.impacts,
             "diagnostics": self.diagnostics,
         }
+        if self.storeys is not None:
+            out.update(self.storeys.as_json(units))
+        return out
+
+
+@dataclass
+class StoreyResponse:
+    """What a yielding building's storeys did, storey 1 first; lengths in the scene's units, work in its energy's.
+
+    residual_drifts: the drift each storey settles to at rest from the run's end, unloading elastically (every
+    storey shear is zero at rest: (1 - b) p without P-delta, (1 - b) k p / (k - P/h) with it); NaN where no such
+    rest exists (P-delta outweighs the elastic stiffness, or the rest lies beyond the yield surface), and then
+    has_rest is False.
+    """
+
+    peak_drifts: np.ndarray
+    plastic_offsets: np.ndarray
+    residual_drifts: np.ndarray
+    ductility: np.ndarray
+    yield_events: np.ndarray
+    plastic_work: float
+    collapsed: bool
+    has_rest: bool
+
+    def as_json(self, units: str = "m") -> dict:
+        return {f"peak_drifts_{units}": self.peak_drifts.tolist(),
+                f"residual_drifts_{units}": [None if math.isnan(x) else float(x) for x in self.residual_drifts],
+                f"plastic_offsets_{units}": self.plastic_offsets.tolist(),
+                "plastic_work_J": float(self.plastic_work), "yield_events": int(np.sum(self.yield_events)),
+                "ductility": self.ductility.tolist(), "collapsed": bool(self.collapsed)}
 
 
 # ----------------------------------------------------------------------------
@@ -173,7 +206,28 @@ def _cache(nmax: int) -> ConfigCache:
                        np.zeros((s, m2), dtype=np.complex128), np.zeros((s, m2, m2), dtype=np.complex128),
                        np.zeros((s, m2, m2), dtype=np.complex128), np.zeros((s, nmax, nmax)),
                        np.zeros((s, nmax, nmax)), np.zeros((s, nmax), dtype=np.int64), np.zeros((s, nmax)),
-                       np.zeros((s, m2), dtype=np.complex128))
+                       np.zeros((s, m2), dtype=np.complex128), np.zeros((s, nmax)))
+
+
+def _yield_arrays(scene: Scene, mass_full: np.ndarray, floor: np.ndarray) -> YieldArrays | None:
+    """A yielding building's storey table (bundles.YieldArrays), at rest on its elastic branches; None if elastic.
+
+    P-delta's P_i is the weight of every floor and damper unit the storey carries, at the scene's gravity."""
+    b = scene.building
+    if b.is_elastic:
+        return None
+    nf = b.storeys
+    dy = b.yield_drift if b.yield_drift is not None else np.full(nf, np.inf)
+    geometric = np.zeros(nf)
+    if b.p_delta:
+        above = np.array([np.sum(b.masses[i:]) + np.sum(mass_full[nf:][floor >= i]) for i in range(nf)])
+        geometric = above * scene.gravity / b.storey_height
+    limit = np.full(nf, np.inf)
+    if scene.collapse_drift_ratio is not None:
+        limit = scene.collapse_drift_ratio * b.storey_height
+    zi, zf = np.zeros(nf, dtype=np.int64), np.zeros(nf)
+    return YieldArrays(b.storey_stiffness.copy(), np.full(nf, b.hardening), dy.copy(), geometric, limit, zi.copy(),
+                       zf.copy(), zi.copy(), zi.copy(), zf.copy(), zi.copy(), zi.copy(), zf.copy(), zi.copy())
 
 
 def _scene_arrays(scene: Scene):
@@ -211,7 +265,8 @@ def _scene_arrays(scene: Scene):
     p[L.P_REC_DT] = rec_dt
     q0, v0, mode0, side0 = _initial_state(scene, floor, gap, kind, nf + len(mass))
     return dict(model=SceneArrays(p, building, units, load_vec, monitors), springs=springs, fric=fric, harm=harm,
-                record=record, start=StartState(q0, v0, mode0, side0), cache=_cache(nf + n_spring))
+                record=record, yld=_yield_arrays(scene, mass_full, floor), start=StartState(q0, v0, mode0, side0),
+                cache=_cache(nf + n_spring))
 
 
 def run_arrays(arrays: dict, record: int = 0, times=None):
@@ -224,8 +279,11 @@ def run_arrays(arrays: dict, record: int = 0, times=None):
                      samples=np.zeros((len(ts), 2 * nfull)))
     a = arrays
     cache = ConfigCache(*(c.copy() for c in a["cache"]))
-    run_scene(a["model"], a["springs"], a["fric"], a["harm"], a["record"], a["start"], cache, out)
-    return out._asdict()
+    yld = YieldArrays(*(x.copy() for x in a["yld"])) if a["yld"] is not None else None
+    run_scene(a["model"], a["springs"], a["fric"], a["harm"], a["record"], yld, a["start"], cache, out)
+    result = out._asdict()
+    result["yld"] = yld
+    return result
 
 
 def simulate_scene(scene: Scene, *, record: int = 0, times=None) -> SceneResult:
@@ -250,7 +308,7 @@ _WARM: set = set()
 
 #: the optional parts of a scene, each compiled into its own specialisation of the loop when present
 OPTIONAL_PARTS = {"springs": "pendulums or TMDs", "fric": "friction", "harm": "a harmonic load",
-                  "record": "a load record"}
+                  "record": "a load record", "yld": "yielding storeys"}
 
 
 def _signature_key(arrays: dict) -> tuple:
@@ -281,6 +339,8 @@ def _result(scene: Scene, arrays: dict, out: dict) -> SceneResult:
         nfull = len(out["q"])
         samples = {"t": out["ts"], "q": out["samples"][:, :nfull], "v": out["samples"][:, nfull:]}
     peaks = out["peak"]
+    collapsed = bool(diag[L.D_COLLAPSE])
+    complete = complete or (collapsed and span > 0)
     return SceneResult(
         scene=scene,
         peak_roof_displacement=float(peaks[0]) if complete else math.nan,
@@ -298,7 +358,24 @@ def _result(scene: Scene, arrays: dict, out: dict) -> SceneResult:
         samples=samples,
         amplitude=math.sqrt(2.0) * rms,
         window_span=float(span),
+        storeys=_storey_response(scene, out["yld"], peaks[2:2 + nf], collapsed),
     )
+
+
+def _storey_response(scene: Scene, yld: YieldArrays | None, peak_drifts: np.ndarray, collapsed: bool):
+    """The storeys' measures from the run's yield table (None for an elastic building)."""
+    if yld is None:
+        return None
+    b = 1.0 - yld.hardening
+    p = yld.offset
+    elastic = yld.stiffness - yld.geometric
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rest = np.where(elastic > 0.0, b * yld.stiffness * p / elastic, np.nan)
+    rest[np.abs(rest - p) > yld.yield_drift] = np.nan
+    return StoreyResponse(peak_drifts=peak_drifts.copy(), plastic_offsets=p.copy(), residual_drifts=rest,
+                          ductility=peak_drifts / yld.yield_drift, yield_events=yld.yields.copy(),
+                          plastic_work=float(np.sum(yld.plastic)), collapsed=collapsed,
+                          has_rest=bool(np.all(np.isfinite(rest))))
 
 
 def amplitude(result: SceneResult) -> float:

@@ -19,12 +19,16 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from impact.engine.layout import KIND_CID, MODE_FREE, NPOLY
+from impact.engine.layout import BRANCH_ELASTIC, KIND_CID, MODE_FREE, NPOLY
 
 _SERIES = 0.5  # |z T| below which the integrals use their power series
 # _phi0's series: below 0.05 its closed form loses more than eps / 0.05 = 4e-15 (relative) to cancellation,
 # and 8 terms reach eps there (0.05^9 / 10! = 5e-19)
 _PHI0_SERIES, _PHI0_TERMS = 0.05, 8
+# |lam| below this fraction of the largest is a zero mode: the eigensolver returns an exactly singular K's zero at
+# about eps times the condition of the eigenbasis (1e-14 on the probe's ten-storey buildings); a true mode this
+# slow moves by |lam| T over a segment of length T, far below any segment's |lam_max| T
+RIGID_MODE = 1e-10
 _RECIP = np.concatenate((np.zeros(1), 1.0 / np.arange(1.0, 46.0)))  # _RECIP[n] = 1 / n
 
 
@@ -195,12 +199,58 @@ def config_key(mode):
     return key
 
 
+@njit(cache=True, inline='always')
+def scene_key(mode, yld):
+    """The configuration's key: the units held by their floor (config_key) and, after them, the storeys on a
+    yielding branch (whose stiffness is b k); up or down does not change the stiffness, only the constant force."""
+    key = config_key(mode)
+    if yld is not None:
+        nu = mode.shape[0]
+        branch = yld.branch
+        for i in range(branch.shape[0]):
+            if branch[i] != BRANCH_ELASTIC:
+                key |= 1 << (nu + i)
+    return key
+
+
 @njit(cache=True)
-def _assemble(building, units, springs, load_vec, mode, cache, s):
-    """Reduced M, K, C and the reduced load of one configuration, into slot s."""
+def _storey_stiffness(yld, kr):
+    """P-delta's geometric stiffness -P/h on every storey, and a yielding storey's stiffness taken down to b k."""
+    for i in range(yld.stiffness.shape[0]):
+        dk = -yld.geometric[i]
+        if yld.branch[i] != BRANCH_ELASTIC:
+            dk -= (1.0 - yld.hardening[i]) * yld.stiffness[i]
+        if dk != 0.0:
+            kr[i, i] += dk
+            if i > 0:
+                kr[i - 1, i - 1] += dk
+                kr[i - 1, i] -= dk
+                kr[i, i - 1] -= dk
+
+
+@njit(cache=True)
+def _snap_rigid_modes(lam, n):
+    """Eigenvalues within round-off of zero made exactly zero: a perfectly plastic storey (b = 0, no P-delta)
+    leaves the floors above it free to drift, a mode of K with zero frequency whose eigenvalue the solver returns
+    as round-off of the largest.  Its particular solution is a polynomial (build_segment), its exponential a
+    constant (segment.eval2 reads a zero exponent as 1)."""
+    big = 0.0
+    for k in range(2 * n):
+        big = max(big, abs(lam[k]))
+    for k in range(2 * n):
+        if abs(lam[k]) <= RIGID_MODE * big:
+            lam[k] = 0.0
+
+
+@njit(cache=True)
+def _assemble(building, units, springs, yld, load_vec, mode, cache, s):
+    """Reduced M, K, C and the reduced load of one configuration, into slot s.
+
+    A yielding building (yld) changes K by its storeys' branches and P-delta; its K may be singular (a perfectly
+    plastic storey), so K^-1 is not formed for it and build_segment takes its particular solution through the modes."""
     mb, kb, cb = building
     ukind, ufloor, um = units.kind, units.floor, units.mass
-    keys, nr, lam, vec, vinv, kinv, cred, fidx, ellr, zc = cache
+    keys, nr, lam, vec, vinv, kinv, cred, fidx, ellr, zc, mred = cache
     nf = mb.shape[0]
     nu = um.shape[0]
     fidx[s, :] = -1
@@ -242,6 +292,8 @@ def _assemble(building, units, springs, load_vec, mode, cache, s):
             cr[r, r] += uc[j]
             cr[f, r] -= uc[j]
             cr[r, f] -= uc[j]
+    if yld is not None:
+        _storey_stiffness(yld, kr)
     a_mat = np.zeros((2 * n, 2 * n), dtype=np.complex128)
     for i in range(n):
         a_mat[i, n + i] = 1.0
@@ -250,7 +302,11 @@ def _assemble(building, units, springs, load_vec, mode, cache, s):
             a_mat[n + i, n + j] = -cr[i, j] / m[i]
     w, v = np.linalg.eig(a_mat)
     vi = np.linalg.inv(v)
-    ki = np.linalg.inv(kr)
+    if yld is None:
+        ki = np.linalg.inv(kr)
+    else:
+        ki = np.zeros((n, n))
+        _snap_rigid_modes(w, n)
     nr[s] = n
     lam[s, :] = 0.0
     vec[s, :, :] = 0.0
@@ -263,8 +319,10 @@ def _assemble(building, units, springs, load_vec, mode, cache, s):
         for j in range(2 * n):
             vec[s, i, j] = v[i, j]
             vinv[s, i, j] = vi[i, j]
+    mred[s, :] = 0.0
     for i in range(n):
         ellr[s, i] = lr[i]
+        mred[s, i] = m[i]
         for j in range(n):
             kinv[s, i, j] = ki[i, j]
             cred[s, i, j] = cr[i, j]
@@ -272,7 +330,7 @@ def _assemble(building, units, springs, load_vec, mode, cache, s):
 
 
 @njit(cache=True)
-def config_slot(building, units, springs, load_vec, omega, mode, cache, cursor):
+def config_slot(building, units, springs, yld, load_vec, omega, mode, cache, cursor):
     """The cache slot holding this configuration's eigen-data (assembled on a miss).
 
     omega > 0: the load is harmonic at that frequency and the slot also holds
@@ -280,13 +338,13 @@ def config_slot(building, units, springs, load_vec, omega, mode, cache, cursor):
     cursor: one-element array, the slot to replace next.
     """
     keys = cache.key
-    key = config_key(mode)
+    key = scene_key(mode, yld)
     for s in range(keys.shape[0]):
         if keys[s] == key:
             return s
     s = cursor[0]
     cursor[0] = (s + 1) % keys.shape[0]
-    a_mat, m, lr, n = _assemble(building, units, springs, load_vec, mode, cache, s)
+    a_mat, m, lr, n = _assemble(building, units, springs, yld, load_vec, mode, cache, s)
     zc = cache.forced
     zc[s, :] = 0.0
     if omega > 0.0:
@@ -325,7 +383,7 @@ def config_slot(building, units, springs, load_vec, omega, mode, cache, cursor):
 # ----------------------------------------------------------------------------
 
 @njit(cache=True, inline='always')
-def build_segment(w, s, units, springs, fric, harmonic, load_at, omega):
+def build_segment(w, s, units, springs, fric, yld, harmonic, load_at, omega):
     """Coefficient rows w.C, w.P (over exponents w.kap) of every degree of freedom from the state (w.q, w.v) in
     configuration slot s of w.cache; w: bundles.SegmentWork.
 
@@ -334,11 +392,13 @@ def build_segment(w, s, units, springs, fric, harmonic, load_at, omega):
     w.work = (floats, complexes): scratch of 7 and 4 times the largest reduced size, so that a
     segment allocates nothing; the modal amplitudes are left in complexes[2n:4n] and the particular
     solution's velocity in floats[2n:3n] (the modal shortcuts read them).
+    yld: a yielding building's storeys (bundles.YieldArrays), whose constant forces join the load and whose
+    particular solution is taken through the modes (_modal_particular), since its K may be singular.
     """
     mode, offset, sigma, q, v, kap, C, P, work = w.mode, w.offset, w.sigma, w.q, w.v, w.kap, w.C, w.P, w.work
     theta0, r0, r1 = load_at
     nf = C.shape[0] - units.mass.shape[0]
-    keys, nr, lam, vec, vinv, kinv, cred, fidx, ellr, zc = w.cache
+    keys, nr, lam, vec, vinv, kinv, cred, fidx, ellr, zc, mred = w.cache
     ufloor, um, uload = units.floor, units.mass, units.load
     n = nr[s]
     nt = kap.shape[0]
@@ -361,19 +421,23 @@ def build_segment(w, s, units, springs, fric, harmonic, load_at, omega):
             if mode[j] == MODE_FREE and fric[j] > 0.0:
                 # a sliding mass drags its floor along with m a_f sigma
                 wf[G0 + ufloor[j]] += um[j] * fric[j] * sigma[j]
-    for i in range(n):
-        wf[U1 + i] = 0.0
-        wf[QP + i] = 0.0
-        wf[TMP + i] = wf[G0 + i]
-    for i in range(n):
-        for j in range(n):
-            wf[U1 + i] += kinv[s, i, j] * wf[G1 + j]
-    for i in range(n):
-        for j in range(n):
-            wf[TMP + i] -= cred[s, i, j] * wf[U1 + j]
-    for i in range(n):
-        for j in range(n):
-            wf[QP + i] += kinv[s, i, j] * wf[TMP + j]
+    if yld is None:
+        for i in range(n):
+            wf[U1 + i] = 0.0
+            wf[QP + i] = 0.0
+            wf[TMP + i] = wf[G0 + i]
+        for i in range(n):
+            for j in range(n):
+                wf[U1 + i] += kinv[s, i, j] * wf[G1 + j]
+        for i in range(n):
+            for j in range(n):
+                wf[TMP + i] -= cred[s, i, j] * wf[U1 + j]
+        for i in range(n):
+            for j in range(n):
+                wf[QP + i] += kinv[s, i, j] * wf[TMP + j]
+    else:
+        _storey_constants(yld, q, wf, G0)
+        _modal_particular(n, s, lam, vec, vinv, mred, wf)
     ph = np.exp(1j * theta0)
     for i in range(n):
         full = fidx[s, i]
@@ -412,7 +476,7 @@ def build_segment(w, s, units, springs, fric, harmonic, load_at, omega):
             h1 -= 2.0 * omega * ch.imag
         P[full, 0] = q[full] - h0
         P[full, 1] = v[full] - h1
-        P[full, 2] = 0.0
+        P[full, 2] = 0.0 if yld is None else wf[TMP + i]  # a zero mode's particular solution is quadratic
         P[full, 3] = 0.0
     _copy_identical_rows(units, springs, mode, nf, q, v, C, P)
     for j in range(um.shape[0]):
@@ -435,6 +499,53 @@ def build_segment(w, s, units, springs, fric, harmonic, load_at, omega):
             P[row, 1] = v[row]
             P[row, 2] = 0.5 * a0
             P[row, 3] = a1 / 6.0
+
+
+@njit(cache=True, inline='always')
+def _storey_constants(yld, q, wf, g0):
+    """Each storey's constant force onto the reduced load at wf[g0:]: its restoring force is k u - (1 - b) k p on
+    the elastic branch and b k u + s (1 - b) k d_y on a yielding one (s = +-1), whose k u and b k u are in K."""
+    branch, k, b, dy, p = yld.branch, yld.stiffness, yld.hardening, yld.yield_drift, yld.offset
+    for i in range(k.shape[0]):
+        if branch[i] == BRANCH_ELASTIC:
+            r0 = -(1.0 - b[i]) * k[i] * p[i]
+        else:
+            r0 = branch[i] * (1.0 - b[i]) * k[i] * dy[i]
+        wf[g0 + i] -= r0
+        if i > 0:
+            wf[g0 + i - 1] += r0
+
+
+@njit(cache=True, inline='always')
+def _modal_particular(n, s, lam, vec, vinv, mred, wf):
+    """The particular solution of M q'' + C q' + K q = g0 + g1 tau through the modes, for any K (a singular one too).
+
+    Mode k's amplitude obeys eta' = lam eta + a + b tau (a, b: the load's modal parts); its polynomial solution is
+    -(a + b / lam) / lam - b tau / lam, or a tau + b tau^2 / 2 for a zero mode.  Written into
+    wf: the positions at tau = 0 (QP, 3n), the velocities at 0 (U1, 2n) and the tau^2 coefficients (TMP, 4n).
+    """
+    G0, G1, U1, QP, TMP = 0, n, 2 * n, 3 * n, 4 * n
+    for i in range(n):
+        wf[U1 + i] = 0.0
+        wf[QP + i] = 0.0
+        wf[TMP + i] = 0.0
+    for k in range(2 * n):
+        a = 0.0 + 0.0j
+        b = 0.0 + 0.0j
+        for r in range(n):
+            a += vinv[s, k, n + r] * (wf[G0 + r] / mred[s, r])
+            b += vinv[s, k, n + r] * (wf[G1 + r] / mred[s, r])
+        lk = lam[s, k]
+        gamma = 0.0 + 0.0j
+        if lk == 0.0:
+            alpha = 0.0 + 0.0j
+            gamma = 0.5 * b
+        else:
+            alpha = -(a + b / lk) / lk
+        for i in range(n):
+            wf[QP + i] += (vec[s, i, k] * alpha).real
+            wf[U1 + i] += (vec[s, n + i, k] * alpha).real
+            wf[TMP + i] += (vec[s, i, k] * gamma).real
 
 
 @njit(cache=True)
@@ -578,15 +689,18 @@ def poly_integral(pa, pb, big_t):
     return out
 
 @njit(cache=True, inline='always')
-def energy(building, units, springs, nf, q, v):
-    """Kinetic plus elastic energy of the scene (relative coordinates)."""
+def energy(building, units, springs, yld, nf, q, v):
+    """Kinetic plus stored energy of the scene (relative coordinates)."""
     mb, kb, _ = building
     ufloor, um = units.floor, units.mass
     e = 0.0
     for a in range(nf):
         e += 0.5 * mb[a] * v[a] * v[a]
-        for b in range(nf):
-            e += 0.5 * q[a] * kb[a, b] * q[b]
+        if yld is None:
+            for b in range(nf):
+                e += 0.5 * q[a] * kb[a, b] * q[b]
+    if yld is not None:
+        e += storey_energy(yld, q)
     for j in range(um.shape[0]):
         e += 0.5 * um[j] * v[nf + j] * v[nf + j]
     if springs is not None:
@@ -595,4 +709,23 @@ def energy(building, units, springs, nf, q, v):
             if uk[j] != 0.0:
                 s = q[nf + j] - q[ufloor[j]]
                 e += 0.5 * uk[j] * s * s
+    return e
+
+
+@njit(cache=True, inline='always')
+def storey_drift(x, i):
+    """Storey i's drift (or drift velocity, from velocities): its floor less the one below (the ground for i = 0)."""
+    return x[i] - x[i - 1] if i > 0 else x[0]
+
+
+@njit(cache=True, inline='always')
+def storey_energy(yld, q):
+    """What a yielding building's storeys store: b k u^2 / 2 in the hardening spring, (1 - b) k (u - p)^2 / 2 in the
+    perfectly plastic element and -P u^2 / (2 h) of gravity through P-delta; on a yielding branch u - p is s d_y."""
+    k, b, dy, g, branch, p = yld.stiffness, yld.hardening, yld.yield_drift, yld.geometric, yld.branch, yld.offset
+    e = 0.0
+    for i in range(k.shape[0]):
+        u = storey_drift(q, i)
+        el = u - p[i] if branch[i] == BRANCH_ELASTIC else branch[i] * dy[i]
+        e += 0.5 * b[i] * k[i] * u * u + 0.5 * (1.0 - b[i]) * k[i] * el * el - 0.5 * g[i] * u * u
     return e

@@ -1,8 +1,11 @@
-"""Linear shear buildings: floor masses, storey stiffnesses and damping.
+"""Shear buildings: floor masses, storey stiffnesses and damping, and storeys that may yield.
 
 Floors are numbered 1 (lowest) to N (roof).  Storey i joins floor i to the
 floor below (the ground for i = 1).  Damping is either classical modal
-damping with one ratio in every mode, or given as a matrix.  Units are the
+damping with one ratio in every mode, or given as a matrix.  A building is
+elastic unless given yield drifts (Building.yielding): then each storey is
+bilinear with kinematic hardening, and P-delta may act on it (docs/model.md,
+"Buildings that yield").  Units are the
 caller's: model units for the paper's harmonic study (M = 1, K = 1), SI
 (kg, N/m, s) for ground motion, where only ratios of masses matter to the
 relative response.
@@ -11,7 +14,7 @@ relative response.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.linalg import eigh
@@ -77,14 +80,37 @@ def _float_array(name: str, values) -> np.ndarray:
         raise ParameterError(f"{name} must be numbers, got {values!r}") from None
 
 
+def _checked_per_storey(name: str, values, n: int, lo: float, hi: float, *, hi_open=False) -> np.ndarray:
+    """One value per storey (or one for all), each in (lo, hi], refused by name and storey."""
+    a = _float_array(name, values)
+    if a.shape == (1,):
+        a = np.full(n, a[0])
+    if a.shape != (n,):
+        raise ParameterError(f"{name} has {len(a)} values for {n} storeys: give one, or one per storey")
+    for i, x in enumerate(a, start=1):
+        _check(f"{name}[{i}]", x, lo, hi, lo_open=True, hi_open=hi_open)
+    return a
+
+
 @dataclass(frozen=True, eq=False)
 class Building:
-    """A shear building: floor masses (N,), storey stiffnesses (N,), damping matrix (N, N)."""
+    """A shear building: floor masses (N,), storey stiffnesses (N,), damping matrix (N, N).
+
+    Yielding (all None / 0 / False: elastic, as every building before yielding was added):
+    yield_drift (N,): each storey's drift at first yield, in metres (its yield force is k d_y, Steel01's Fy);
+    hardening: the post-yield stiffness ratio b in [0, 1), one for every storey;
+    storey_height (N,): each storey's height, which P-delta and the collapse limit need;
+    p_delta: gravity's P-delta on every storey, a geometric stiffness -P_i / h_i with P_i the weight above it.
+    """
 
     masses: np.ndarray
     storey_stiffness: np.ndarray
     damping: np.ndarray
     zeta: float = math.nan
+    yield_drift: np.ndarray | None = None
+    hardening: float = 0.0
+    storey_height: np.ndarray | None = None
+    p_delta: bool = False
 
     def __post_init__(self):
         m, k = _checked_floors(self.masses, self.storey_stiffness)
@@ -92,6 +118,35 @@ class Building:
         object.__setattr__(self, "masses", m)
         object.__setattr__(self, "storey_stiffness", k)
         object.__setattr__(self, "damping", c)
+        self._check_yielding(len(m))
+
+    def _check_yielding(self, n: int) -> None:
+        if self.yield_drift is not None:
+            object.__setattr__(self, "yield_drift", _checked_per_storey("yield_drift", self.yield_drift, n, 0.0, 1e3))
+        _check("hardening", self.hardening, 0.0, 1.0, hi_open=True)
+        if self.storey_height is not None:
+            object.__setattr__(self, "storey_height",
+                               _checked_per_storey("storey_height", self.storey_height, n, 0.0, 1e4))
+        if self.p_delta and self.storey_height is None:
+            raise ParameterError("p_delta needs storey_height: P-delta's stiffness is P / h")
+        if (self.yield_drift is None) and self.hardening != 0.0:
+            raise ParameterError("hardening needs yield_drift: an elastic building has no post-yield branch")
+        if self.yield_drift is not None and self.hardening == 0.0 and not self.p_delta:
+            # a perfectly plastic storey leaves the floors above it a rigid mode, which only damping keeps finite
+            if np.min(np.linalg.eigvalsh(self.damping)) <= 1e-12 * np.max(np.abs(self.damping)):
+                raise ParameterError("hardening = 0 without P-delta needs damping in every mode (zeta > 0): "
+                                     "a yielding storey would leave an undamped rigid mode")
+
+    def yielding(self, yield_drift, hardening: float = 0.0, storey_height=None, p_delta: bool = False) -> "Building":
+        """This building with storeys that yield: yield drifts in metres (one, or one per storey), the hardening
+        ratio b in [0, 1), storey heights in metres (for P-delta and the collapse limit), P-delta on or off."""
+        return replace(self, yield_drift=yield_drift, hardening=float(hardening), storey_height=storey_height,
+                       p_delta=bool(p_delta))
+
+    @property
+    def is_elastic(self) -> bool:
+        """Whether every storey is linear and without P-delta: the engine runs it exactly as an elastic building."""
+        return self.yield_drift is None and not self.p_delta
 
     @classmethod
     def uniform(cls, storeys: int, period_s: float, zeta: float, floor_mass: float = 1.0e5) -> "Building":
@@ -155,6 +210,11 @@ class Building:
         return 2.0 * math.pi / self.omega1
 
     def as_dict(self) -> dict:
-        return {"storeys": self.storeys, "masses": self.masses.tolist(),
-                "storey_stiffness": self.storey_stiffness.tolist(), "zeta": self.zeta,
-                "period1_s": self.period1}
+        out = {"storeys": self.storeys, "masses": self.masses.tolist(),
+               "storey_stiffness": self.storey_stiffness.tolist(), "zeta": self.zeta,
+               "period1_s": self.period1}
+        if not self.is_elastic:
+            out.update(yield_drift=None if self.yield_drift is None else self.yield_drift.tolist(),
+                       hardening=self.hardening, p_delta=self.p_delta,
+                       storey_height=None if self.storey_height is None else self.storey_height.tolist())
+        return out

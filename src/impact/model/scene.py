@@ -179,6 +179,9 @@ class Scene:
         bounces every 3e-6 s, 1e6 events a period, all resolved.  A run that reaches it, or makes 1000 events
         within 1e-9 of a period (a loop without progress, which the engine guards against), ends flagged
         (event_cap_reached)
+    collapse_drift_ratio
+        a yielding building's run stops as a collapse once a storey's drift passes this fraction of its height
+        (None: never; needs the building's storey heights)
     """
 
     building: Building
@@ -190,6 +193,7 @@ class Scene:
     gravity: float = G_GRAV
     max_events_per_period: int = 2_000_000
     unit_starts: tuple | None = None
+    collapse_drift_ratio: float | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "dampers", tuple(self.dampers))
@@ -216,6 +220,12 @@ class Scene:
         check_integer("max_events_per_period", self.max_events_per_period, 10)
         if len(self.unit_list()) > 60:
             raise ParameterError("at most 60 damper units in one scene")
+        if not self.building.is_elastic and len(self.unit_list()) + n > 62:
+            raise ParameterError("a yielding building's units and storeys are at most 62 in one scene")
+        if self.collapse_drift_ratio is not None:
+            _check("collapse_drift_ratio", self.collapse_drift_ratio, 0.0, 10.0, lo_open=True)
+            if self.building.storey_height is None:
+                raise ParameterError("collapse_drift_ratio needs the building's storey_height")
         if self.unit_starts is not None:
             self._check_unit_starts()
 
