@@ -7,12 +7,14 @@ push, the rest a storey settles to), against its own elastic runs, and against i
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
 import pytest
 import yield_reference as R
 
+from impact.closed_form.pushover import pattern, pushover
 from impact.engine.run import as_paper_system, simulate
 from impact.engine.scenes import simulate_scene
 from impact.model.building import Building
@@ -176,3 +178,45 @@ def test_a_perfectly_plastic_storey_needs_damping_and_collapse_needs_heights():
         undamped.yielding(0.1, 0.0)
     with pytest.raises(ParameterError, match="collapse_drift_ratio needs"):
         _quake(Building.uniform(1, 1.0, 0.05).yielding(0.01), collapse_drift_ratio=0.1)
+
+
+def test_a_one_storey_pushover_is_the_bilinear_backbone_with_p_delta():
+    b = Building.uniform(1, 1.0, 0.05).yielding(0.02, 0.05, storey_height=3.0, p_delta=True)
+    k, g = b.storey_stiffness[0], b.masses[0] * G_GRAV / 3.0
+    curve = pushover(b, 0.1)
+    assert curve.roof_drift.tolist() == pytest.approx([0.0, 0.02, 0.1], rel=1e-12)
+    assert curve.base_shear[1] == pytest.approx((k - g) * 0.02, rel=1e-12)
+    assert curve.base_shear[2] - curve.base_shear[1] == pytest.approx((0.05 * k - g) * 0.08, rel=1e-9)
+    assert curve.yielding == [[], [1], [1]]
+
+
+def test_a_three_storey_pushover_yields_its_first_storey_first_at_its_strength():
+    """Without P-delta storey 1 carries the whole base shear, so it yields first, at V = k d_y, with the roof at
+    V sum(S_i) / k; past it every storey's drift follows its own branch."""
+    b = Building.uniform(3, 1.0, 0.05).yielding(0.02, 0.1)
+    k = b.storey_stiffness[0]
+    carried = np.cumsum(pattern(b, "triangular")[::-1])[::-1]
+    curve = pushover(b, 0.2, "triangular")
+    assert curve.base_shear[1] == pytest.approx(k * 0.02, rel=1e-12)
+    assert curve.roof_drift[1] == pytest.approx(k * 0.02 * carried.sum() / k, rel=1e-12)
+    assert curve.yielding[1] == [1]
+    assert np.all(np.diff(curve.base_shear) > 0)  # hardening, no P-delta: the shear only grows
+
+
+def test_quake_and_pushover_take_the_yield_flags_and_name_a_bad_one(capsys):
+    from impact.cli import main
+    main(["quake", "--record", "elcentro", "--pga-g", "0.4", "--storeys", "2", "--yield-drift-m", "0.01",
+          "--hardening", "0.2", "--storey-height-m", "3", "--p-delta", "--collapse-drift-ratio", "0.1", "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert len(out["ductility"]) == 2 and out["yield_events"] > 0 and out["collapsed"] is False
+    assert out["plastic_work_J"] > 0
+    for argv, flag in ((["quake", "--record", "elcentro", "--hardening", "0.1"], "--hardening needs --yield-drift-m"),
+                       (["quake", "--record", "elcentro", "--yield-drift-m", "0.01", "--p-delta"], "--p-delta needs"),
+                       (["pushover", "--roof-drift-m", "0.1"], "pushover needs --yield-drift-m")):
+        with pytest.raises(SystemExit):
+            main(argv)
+        assert flag in capsys.readouterr().err
+    main(["pushover", "--storeys", "2", "--yield-drift-m", "0.01", "--roof-drift-m", "0.1", "--hardening", "0.1",
+          "--json"])
+    curve = json.loads(capsys.readouterr().out)
+    assert curve["roof_drift_m"][-1] == pytest.approx(0.1)

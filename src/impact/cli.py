@@ -17,6 +17,7 @@ import sys
 from pathlib import Path
 
 from impact import __version__
+from impact.closed_form.pushover import PATTERNS as PUSHOVER_PATTERNS
 from impact.model.params import MAX_TUNING, STARTS, ParameterError, Protocol, System, ipc_label
 
 DEFAULTS = dict(mu=0.01, beta=0.0048, e=0.25, gap_ratio=1.0, force_ratio=0.096)
@@ -255,14 +256,68 @@ def _tmd_design(args, flags: dict, building) -> dict:
     return flags | {flag: getattr(design, flag) for flag in TMD_DESIGNED if getattr(args, flag) is None}
 
 
+def _building(args):
+    """The uniform building of impact quake and impact pushover, yielding when --yield-drift-m is given."""
+    from impact.model.building import Building
+
+    building = Building.uniform(args.storeys, args.period_s, args.zeta, floor_mass=args.floor_mass_kg)
+    if args.hardening is not None and args.yield_drift_m is None:
+        raise ParameterError("--hardening needs --yield-drift-m (an elastic storey has no post-yield branch)")
+    for flag, given in (("--p-delta", args.p_delta), ("--collapse-drift-ratio", args.collapse_drift_ratio)):
+        if given and args.storey_height_m is None:
+            raise ParameterError(f"{flag} needs --storey-height-m")
+    if args.yield_drift_m is None and not args.p_delta:
+        return building
+    return building.yielding(args.yield_drift_m, args.hardening or 0.0, storey_height=args.storey_height_m,
+                             p_delta=args.p_delta)
+
+
+def _building_flags(parser) -> None:
+    """The uniform building's flags (impact quake, impact pushover)."""
+    parser.add_argument("--storeys", type=_ranged(1, 200, kind=int), default=1, help="number of storeys, in [1, 200]")
+    parser.add_argument("--period-s", type=_ranged(0, 1e4, lo_open=True), default=1.0,
+                        help="fundamental period T1 in seconds, in (0, 1e4]")
+    parser.add_argument("--zeta", type=_ranged(0, 1, lo_open=True, hi_open=True), default=0.02,
+                        help="modal damping ratio in every mode, in (0, 1)")
+    parser.add_argument("--floor-mass-kg", type=_ranged(0, 1e15, lo_open=True), default=1.0e5,
+                        help="mass of each floor in kg (only ratios matter to the response)")
+
+
+def _yield_flags(parser, collapse: bool) -> None:
+    """The flags of a building that yields (impact quake, impact pushover)."""
+    g = parser.add_argument_group("yielding storeys (docs/model.md, 'Buildings that yield')")
+    g.add_argument("--yield-drift-m", type=_ranged(0, 1e3, lo_open=True), default=None,
+                   help="every storey's drift at first yield in metres, in (0, 1e3] (default: storeys do not yield)")
+    g.add_argument("--hardening", type=_ranged(0, 1, hi_open=True), default=None,
+                   help="post-yield stiffness over the elastic one, b in [0, 1) (default 0: perfectly plastic)")
+    g.add_argument("--storey-height-m", type=_ranged(0, 1e4, lo_open=True), default=None,
+                   help="every storey's height in metres, in (0, 1e4] (for P-delta and the collapse limit)")
+    g.add_argument("--p-delta", action="store_true", help="gravity's P-delta on every storey (needs the height)")
+    if collapse:
+        g.add_argument("--collapse-drift-ratio", type=_ranged(0, 10, lo_open=True), default=None,
+                       help="stop and report collapse once a storey's drift passes this times its height, in (0, 10]")
+    else:
+        parser.set_defaults(collapse_drift_ratio=None)
+
+
+def cmd_pushover(args) -> dict:
+    """The exact static pushover of a yielding uniform building: base shear against roof drift."""
+    from impact.closed_form.pushover import pushover
+
+    if args.yield_drift_m is None:
+        raise ParameterError("pushover needs --yield-drift-m: an elastic building's curve is a straight line")
+    building = _building(args)
+    curve = pushover(building, args.roof_drift_m, args.pattern)
+    return {"building": building.as_dict(), "pattern": args.pattern, **curve.as_json()}
+
+
 def cmd_quake(args) -> dict:
     """A shear building under a ground-motion record, with or without a damper at one floor."""
     from impact.engine.run import simulate
-    from impact.model.building import Building
     from impact.model.scene import GroundMotion, Scene
 
     record = _quake_record(args)
-    building = Building.uniform(args.storeys, args.period_s, args.zeta, floor_mass=args.floor_mass_kg)
+    building = _building(args)
     if args.floor is not None and args.floor > args.storeys:
         raise ParameterError(f"--floor = {args.floor} is out of range: allowed [1, --storeys = {args.storeys}]")
     flags = _quake_damper_flags(args)
@@ -274,7 +329,8 @@ def cmd_quake(args) -> dict:
             raise ParameterError(f"--gap-m is required for --damper {args.damper}")
         dampers = (_quake_damper(args, flags, building.total_mass),)
     load = GroundMotion.from_record(record, pga_g=args.pga_g)
-    scene = Scene(building, dampers, load, duration=args.duration_s, start=flags.get("start", "centre"))
+    scene = Scene(building, dampers, load, duration=args.duration_s, start=flags.get("start", "centre"),
+                  collapse_drift_ratio=args.collapse_drift_ratio)
     if args.plot and not dampers:
         raise ParameterError("--plot draws a damper's strokes and impacts: give --damper cid, pid or tmd")
     plotted = _plotted(scene, building.period1 / 50) if args.plot else {}
@@ -491,13 +547,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "--duration-s, is enveloped and scaled to --pga-g)")
     qk.add_argument("--pga-g", type=_ranged(0, 10, lo_open=True), default=None,
                     help="scale the record to this peak ground acceleration in g, in (0, 10] (default: as recorded)")
-    qk.add_argument("--storeys", type=_ranged(1, 200, kind=int), default=1, help="number of storeys, in [1, 200]")
-    qk.add_argument("--period-s", type=_ranged(0, 1e4, lo_open=True), default=1.0,
-                    help="fundamental period T1 in seconds, in (0, 1e4]")
-    qk.add_argument("--zeta", type=_ranged(0, 1, lo_open=True, hi_open=True), default=0.02,
-                    help="modal damping ratio in every mode, in (0, 1)")
-    qk.add_argument("--floor-mass-kg", type=_ranged(0, 1e15, lo_open=True), default=1.0e5,
-                    help="mass of each floor in kg (only ratios matter to the response)")
+    _building_flags(qk)
     qk.add_argument("--damper", choices=("none", "cid", "pid", "tmd"), default="none", help="the damper")
     qk.add_argument("--mu", type=_ranged(0, 10, lo_open=True), default=None,
                     help=f"damper mass over the building's total mass, in (0, 10] (default {QUAKE_DEFAULTS['mu']}: the "
@@ -527,7 +577,18 @@ def build_parser() -> argparse.ArgumentParser:
     qk.add_argument("--plot", metavar="FILE", type=_new_file(*PLOT_SUFFIXES), default=None,
                     help=PLOT_HELP + "; with the bare building's roof")
     qk.add_argument("--json", action="store_true", help="print one JSON object (the only output format)")
+    _yield_flags(qk, collapse=True)
     qk.set_defaults(func=cmd_quake)
+
+    po = sub.add_parser("pushover", help="the exact static pushover of a yielding shear building (SI units)")
+    _building_flags(po)
+    _yield_flags(po, collapse=False)
+    po.add_argument("--roof-drift-m", type=_ranged(0, 1e3, lo_open=True), required=True,
+                    help="push the roof to this drift in metres, in (0, 1e3]")
+    po.add_argument("--pattern", choices=PUSHOVER_PATTERNS, default=PUSHOVER_PATTERNS[0],
+                    help="the lateral load's shape: the first mode's inertia, heights times masses, or the masses")
+    po.add_argument("--json", action="store_true", help="print one JSON object (the only output format)")
+    po.set_defaults(func=cmd_pushover)
 
     rc = sub.add_parser("records", help="list the FEMA P695 ground motions: keys for quake --record, and what they are")
     rc.add_argument("--suite", choices=("farfield", "nearfield", "all"), default="all", help="the suite to list")
