@@ -12,7 +12,7 @@ STAMP  := $(VENV)/.installed
 # compile only the kernels they use (make study measured 1,175 s cold, against 5 to 6 min of compiling then 1,034 s)
 COMPILED := $(VENV)/.compiled
 
-.PHONY: setup study paper test smoke lint docs screenshots bench clean chromium
+.PHONY: setup study paper test smoke lint docs screenshots bench peer clean chromium
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
@@ -60,6 +60,15 @@ screenshots: $(STAMP) chromium
 # it runs under the study's kernel sets, as the study does (impact.kernels)
 bench: $(STAMP)
 	$(BIN)/python -m impact.kernels benchmarks/bench_core.py
+
+# the peers (not a runtime dependency): OpenSees, whose Linux wheel links the system's BLAS and LAPACK, installed
+# here as root when missing (as chromium below); then the impact damper's and the yielding storeys' benchmarks
+peer: $(STAMP)
+	@if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1 && ! ldconfig -p | grep -q libblas.so.3; then \
+	  (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libblas3 liblapack3 >/dev/null); fi
+	$(BIN)/pip install -q -e '.[peer]'
+	$(BIN)/python -m impact.kernels benchmarks/bench_opensees.py
+	$(BIN)/python -m impact.kernels benchmarks/bench_yield.py
 
 clean:
 	rm -rf results .snakemake

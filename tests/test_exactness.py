@@ -250,6 +250,33 @@ def test_random_scenes_run_to_the_end_exactly():
     assert all(" = " in why or " must " in why or "too coarse" in why for why in refused.values()), refused
 
 
+YIELD_PROBE_SCENES = 120
+
+
+def test_random_scenes_on_yielding_buildings_run_to_the_end_exactly():
+    """The seeded probe's scenes on buildings that yield (probe.draw_yielding_scene: perfectly plastic or hardening
+    storeys, P-delta on half, a collapse limit on half, every damper kind and load): the same promises, with the
+    plastic work in the energy balance and the drifts' certified peaks above every dense sample."""
+    from probe import draw_yielding_scene
+
+    failures, refused, yielded = [], 0, 0
+    for i in range(YIELD_PROBE_SCENES):
+        try:
+            scene, scale = draw_yielding_scene(np.random.default_rng([PROBE_SEED, 1, i]), seconds=1.0)
+        except ParameterError:
+            refused += 1
+            continue
+        from probe import SAMPLES, violations
+        result = simulate(scene, measures=("peaks", "samples"), times=np.linspace(0.0, scene.t_end, SAMPLES))
+        yielded += result.storeys.yield_events.sum() > 0
+        problems = violations(scene, scale, result)
+        if problems:
+            failures.append((i, problems))
+    assert failures == []
+    assert refused <= YIELD_PROBE_SCENES // 20
+    assert yielded >= YIELD_PROBE_SCENES // 2  # the draw reaches the yielding branches, not only the elastic ones
+
+
 def test_a_half_row_starts_where_its_full_row_does():
     """The eigenpairs come from a complex eigensolver, so a pair's coefficients are conjugates only to
     round-off of the basis' condition, and the searched half row (one mode of each pair, doubled) starts off

@@ -220,3 +220,12 @@ def test_quake_and_pushover_take_the_yield_flags_and_name_a_bad_one(capsys):
           "--json"])
     curve = json.loads(capsys.readouterr().out)
     assert curve["roof_drift_m"][-1] == pytest.approx(0.1)
+
+
+def test_the_ida_scales_a_run_only_for_a_linear_damper_on_an_elastic_building():
+    from impact.stages.ida.plan import scales_linearly
+    elastic = Building.uniform(3, 1.0, 0.05)
+    assert scales_linearly(elastic, "bare") and scales_linearly(elastic, "tmd")
+    assert not scales_linearly(elastic, "cid")
+    assert not scales_linearly(elastic.yielding(0.02), "bare")
+    assert not scales_linearly(elastic.yielding(0.02, 0.1, storey_height=3.0, p_delta=True), "tmd")

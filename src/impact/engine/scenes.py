@@ -209,19 +209,14 @@ def _cache(nmax: int) -> ConfigCache:
                        np.zeros((s, m2), dtype=np.complex128), np.zeros((s, nmax)))
 
 
-def _yield_arrays(scene: Scene, mass_full: np.ndarray, floor: np.ndarray) -> YieldArrays | None:
-    """A yielding building's storey table (bundles.YieldArrays), at rest on its elastic branches; None if elastic.
-
-    P-delta's P_i is the weight of every floor and damper unit the storey carries, at the scene's gravity."""
+def _yield_arrays(scene: Scene) -> YieldArrays | None:
+    """A yielding building's storey table (bundles.YieldArrays), at rest on its elastic branches; None if elastic."""
     b = scene.building
     if b.is_elastic:
         return None
     nf = b.storeys
     dy = b.yield_drift if b.yield_drift is not None else np.full(nf, np.inf)
-    geometric = np.zeros(nf)
-    if b.p_delta:
-        above = np.array([np.sum(b.masses[i:]) + np.sum(mass_full[nf:][floor >= i]) for i in range(nf)])
-        geometric = above * scene.gravity / b.storey_height
+    geometric = scene.geometric_stiffness()
     limit = np.full(nf, np.inf)
     if scene.collapse_drift_ratio is not None:
         limit = scene.collapse_drift_ratio * b.storey_height
@@ -265,7 +260,7 @@ def _scene_arrays(scene: Scene):
     p[L.P_REC_DT] = rec_dt
     q0, v0, mode0, side0 = _initial_state(scene, floor, gap, kind, nf + len(mass))
     return dict(model=SceneArrays(p, building, units, load_vec, monitors), springs=springs, fric=fric, harm=harm,
-                record=record, yld=_yield_arrays(scene, mass_full, floor), start=StartState(q0, v0, mode0, side0),
+                record=record, yld=_yield_arrays(scene), start=StartState(q0, v0, mode0, side0),
                 cache=_cache(nf + n_spring))
 
 
@@ -328,8 +323,11 @@ def _result(scene: Scene, arrays: dict, out: dict) -> SceneResult:
     nf = scene.building.storeys
     diag = out["diag"]
     span = diag[L.D_TEND] - scene.t_window
-    complete = not diag[L.D_CAP] and span > 0
+    collapsed = bool(diag[L.D_COLLAPSE])
+    complete = not diag[L.D_CAP] and span > 0 and not collapsed
     rms = math.sqrt(out["x2"][0] / span) if complete else math.nan
+    # a collapse ends the run on purpose: its peaks up to the collapse stand, its window's rms does not
+    complete = complete or (collapsed and not diag[L.D_CAP])
     records = None
     if out["recs"].shape[0]:
         n = int(diag[L.D_NREC])
@@ -339,8 +337,6 @@ def _result(scene: Scene, arrays: dict, out: dict) -> SceneResult:
         nfull = len(out["q"])
         samples = {"t": out["ts"], "q": out["samples"][:, :nfull], "v": out["samples"][:, nfull:]}
     peaks = out["peak"]
-    collapsed = bool(diag[L.D_COLLAPSE])
-    complete = complete or (collapsed and span > 0)
     return SceneResult(
         scene=scene,
         peak_roof_displacement=float(peaks[0]) if complete else math.nan,

@@ -25,10 +25,6 @@ _SERIES = 0.5  # |z T| below which the integrals use their power series
 # _phi0's series: below 0.05 its closed form loses more than eps / 0.05 = 4e-15 (relative) to cancellation,
 # and 8 terms reach eps there (0.05^9 / 10! = 5e-19)
 _PHI0_SERIES, _PHI0_TERMS = 0.05, 8
-# |lam| below this fraction of the largest is a zero mode: the eigensolver returns an exactly singular K's zero at
-# about eps times the condition of the eigenbasis (1e-14 on the probe's ten-storey buildings); a true mode this
-# slow moves by |lam| T over a segment of length T, far below any segment's |lam_max| T
-RIGID_MODE = 1e-10
 _RECIP = np.concatenate((np.zeros(1), 1.0 / np.arange(1.0, 46.0)))  # _RECIP[n] = 1 / n
 
 
@@ -215,39 +211,44 @@ def scene_key(mode, yld):
 
 @njit(cache=True)
 def _storey_stiffness(yld, kr):
-    """P-delta's geometric stiffness -P/h on every storey, and a yielding storey's stiffness taken down to b k."""
+    """P-delta's geometric stiffness -P/h on every storey, and a yielding storey's stiffness taken down to b k;
+    returns how many storeys are left without stiffness (yielding, b = 0, no P-delta): K's zero modes."""
+    flat = 0
     for i in range(yld.stiffness.shape[0]):
         dk = -yld.geometric[i]
         if yld.branch[i] != BRANCH_ELASTIC:
             dk -= (1.0 - yld.hardening[i]) * yld.stiffness[i]
+            if yld.hardening[i] == 0.0 and yld.geometric[i] == 0.0:
+                flat += 1
         if dk != 0.0:
             kr[i, i] += dk
             if i > 0:
                 kr[i - 1, i - 1] += dk
                 kr[i - 1, i] -= dk
                 kr[i, i - 1] -= dk
+    return flat
 
 
 @njit(cache=True)
-def _snap_rigid_modes(lam, n):
-    """Eigenvalues within round-off of zero made exactly zero: a perfectly plastic storey (b = 0, no P-delta)
-    leaves the floors above it free to drift, a mode of K with zero frequency whose eigenvalue the solver returns
-    as round-off of the largest.  Its particular solution is a polynomial (build_segment), its exponential a
-    constant (segment.eval2 reads a zero exponent as 1)."""
-    big = 0.0
-    for k in range(2 * n):
-        big = max(big, abs(lam[k]))
-    for k in range(2 * n):
-        if abs(lam[k]) <= RIGID_MODE * big:
-            lam[k] = 0.0
+def _snap_rigid_modes(lam, n, count):
+    """The `count` eigenvalues nearest zero made exactly zero: each perfectly plastic storey on its yielding branch
+    (b = 0, no P-delta) leaves the floors above it free to drift, a mode of K with zero frequency, whose eigenvalue
+    the solver returns as round-off of the largest times the basis' condition.  K's rank falls by one per such
+    storey (a shear building's stiffness is a sum of independent storey terms), so the count is known, not guessed
+    from a threshold.  Its particular solution is a polynomial (build_segment), its exponential a constant
+    (segment.eval2 reads a zero exponent as 1)."""
+    order = np.argsort(np.abs(lam[:2 * n]))
+    for k in range(count):
+        lam[order[k]] = 0.0
 
 
 @njit(cache=True)
 def _assemble(building, units, springs, yld, load_vec, mode, cache, s):
     """Reduced M, K, C and the reduced load of one configuration, into slot s.
 
-    A yielding building (yld) changes K by its storeys' branches and P-delta; its K may be singular (a perfectly
-    plastic storey), so K^-1 is not formed for it and build_segment takes its particular solution through the modes."""
+    A yielding building (yld) changes K by its storeys' branches and P-delta; where that leaves K singular (a
+    perfectly plastic storey yielding), K^-1 is not formed and build_segment takes the particular solution through
+    the modes."""
     mb, kb, cb = building
     ukind, ufloor, um = units.kind, units.floor, units.mass
     keys, nr, lam, vec, vinv, kinv, cred, fidx, ellr, zc, mred = cache
@@ -292,8 +293,9 @@ def _assemble(building, units, springs, yld, load_vec, mode, cache, s):
             cr[r, r] += uc[j]
             cr[f, r] -= uc[j]
             cr[r, f] -= uc[j]
+    flat = 0
     if yld is not None:
-        _storey_stiffness(yld, kr)
+        flat = _storey_stiffness(yld, kr)
     a_mat = np.zeros((2 * n, 2 * n), dtype=np.complex128)
     for i in range(n):
         a_mat[i, n + i] = 1.0
@@ -302,11 +304,11 @@ def _assemble(building, units, springs, yld, load_vec, mode, cache, s):
             a_mat[n + i, n + j] = -cr[i, j] / m[i]
     w, v = np.linalg.eig(a_mat)
     vi = np.linalg.inv(v)
-    if yld is None:
+    if flat == 0:
         ki = np.linalg.inv(kr)
     else:
         ki = np.zeros((n, n))
-        _snap_rigid_modes(w, n)
+        _snap_rigid_modes(w, n, flat)
     nr[s] = n
     lam[s, :] = 0.0
     vec[s, :, :] = 0.0
@@ -392,8 +394,10 @@ def build_segment(w, s, units, springs, fric, yld, harmonic, load_at, omega):
     w.work = (floats, complexes): scratch of 7 and 4 times the largest reduced size, so that a
     segment allocates nothing; the modal amplitudes are left in complexes[2n:4n] and the particular
     solution's velocity in floats[2n:3n] (the modal shortcuts read them).
-    yld: a yielding building's storeys (bundles.YieldArrays), whose constant forces join the load and whose
-    particular solution is taken through the modes (_modal_particular), since its K may be singular.
+    yld: a yielding building's storeys (bundles.YieldArrays), whose constant forces join the load; where a perfectly
+    plastic storey leaves K singular (a zero mode), the particular solution is taken through the modes
+    (_modal_particular), and through K^-1 as for an elastic building everywhere else, which a stiff pendulum's
+    ill-conditioned eigenbasis does not reach.
     """
     mode, offset, sigma, q, v, kap, C, P, work = w.mode, w.offset, w.sigma, w.q, w.v, w.kap, w.C, w.P, w.work
     theta0, r0, r1 = load_at
@@ -421,7 +425,11 @@ def build_segment(w, s, units, springs, fric, yld, harmonic, load_at, omega):
             if mode[j] == MODE_FREE and fric[j] > 0.0:
                 # a sliding mass drags its floor along with m a_f sigma
                 wf[G0 + ufloor[j]] += um[j] * fric[j] * sigma[j]
-    if yld is None:
+    rigid = False
+    if yld is not None:
+        _storey_constants(yld, q, wf, G0)
+        rigid = has_rigid_mode(w.cache, s)
+    if not rigid:
         for i in range(n):
             wf[U1 + i] = 0.0
             wf[QP + i] = 0.0
@@ -436,7 +444,6 @@ def build_segment(w, s, units, springs, fric, yld, harmonic, load_at, omega):
             for j in range(n):
                 wf[QP + i] += kinv[s, i, j] * wf[TMP + j]
     else:
-        _storey_constants(yld, q, wf, G0)
         _modal_particular(n, s, lam, vec, vinv, mred, wf)
     ph = np.exp(1j * theta0)
     for i in range(n):
@@ -476,7 +483,7 @@ def build_segment(w, s, units, springs, fric, yld, harmonic, load_at, omega):
             h1 -= 2.0 * omega * ch.imag
         P[full, 0] = q[full] - h0
         P[full, 1] = v[full] - h1
-        P[full, 2] = 0.0 if yld is None else wf[TMP + i]  # a zero mode's particular solution is quadratic
+        P[full, 2] = wf[TMP + i] if rigid else 0.0  # a zero mode's particular solution is quadratic
         P[full, 3] = 0.0
     _copy_identical_rows(units, springs, mode, nf, q, v, C, P)
     for j in range(um.shape[0]):
@@ -729,3 +736,12 @@ def storey_energy(yld, q):
         el = u - p[i] if branch[i] == BRANCH_ELASTIC else branch[i] * dy[i]
         e += 0.5 * b[i] * k[i] * u * u + 0.5 * (1.0 - b[i]) * k[i] * el * el - 0.5 * g[i] * u * u
     return e
+
+
+@njit(cache=True, inline='always')
+def has_rigid_mode(cache, s):
+    """Whether slot s has a zero mode (_snap_rigid_modes), whose particular solution is quadratic."""
+    for k in range(2 * cache.size[s]):
+        if cache.lam[s, k] == 0.0:
+            return True
+    return False

@@ -32,6 +32,12 @@ from impact.model.params import (
     check_integer,
 )
 
+#: a storey's post-yield stiffness b k - P/h must be zero or at least this fraction of k away from it: near zero its
+#: mode's particular solution splits into an exponential and a polynomial of size 1/lam^2 that cancel.  Measured
+#: (tests/test_yielding.py, tools/probe_scenes.py): at 8e-4 k the flow matches an independent solution to 1e-12,
+#: at 7.4e-6 k a probe scene's energy balance lost 1.6e-7
+MIN_TANGENT = 1e-4
+
 DAMPER_KINDS = ("cid", "pid", "tmd")
 
 
@@ -222,6 +228,8 @@ class Scene:
             raise ParameterError("at most 60 damper units in one scene")
         if not self.building.is_elastic and len(self.unit_list()) + n > 62:
             raise ParameterError("a yielding building's units and storeys are at most 62 in one scene")
+        if not self.building.is_elastic:
+            self._check_tangents()
         if self.collapse_drift_ratio is not None:
             _check("collapse_drift_ratio", self.collapse_drift_ratio, 0.0, 10.0, lo_open=True)
             if self.building.storey_height is None:
@@ -255,6 +263,31 @@ class Scene:
 
     def floor_index(self, floor: int | None) -> int:
         return self.building.storeys - 1 if floor is None else int(floor) - 1
+
+    def geometric_stiffness(self) -> np.ndarray:
+        """P-delta's stiffness P_i / h_i of every storey (zeros without P-delta): P_i is the weight, at the scene's
+        gravity, of every floor and damper unit the storey carries."""
+        b = self.building
+        if not b.p_delta:
+            return np.zeros(b.storeys)
+        carried = b.masses.copy()
+        for _, d in self.unit_list():
+            carried[self.floor_index(d.floor)] += d.mass / d.units
+        return np.cumsum(carried[::-1])[::-1] * self.gravity / b.storey_height
+
+    def _check_tangents(self) -> None:
+        """Refuse a storey that P-delta leaves without elastic stiffness, or whose post-yield stiffness is near zero."""
+        b = self.building
+        for i, (ki, gi) in enumerate(zip(b.storey_stiffness, self.geometric_stiffness()), start=1):
+            if ki - gi <= 0.0:
+                raise ParameterError(f"storey {i}: P-delta's P/h = {gi:.6g} N/m outweighs its stiffness {ki:.6g} N/m: "
+                                     "the building cannot stand")
+            tangent = b.hardening * ki - gi
+            if b.yield_drift is not None and tangent != 0.0 and abs(tangent) < MIN_TANGENT * ki:
+                raise ParameterError(
+                    f"hardening = {b.hardening!r} leaves storey {i} a post-yield stiffness b k - P/h of "
+                    f"{tangent / ki:.2e} k: allowed 0 or at least {MIN_TANGENT:g} k in size (the exact flow loses "
+                    "digits near a zero stiffness; give b = 0 for perfectly plastic)")
 
 
 def paper_scene(kind: str, mu: float, beta: float, e: float, gap: float, r: float, *, rp: float = 0.0,

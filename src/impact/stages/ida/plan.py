@@ -12,10 +12,16 @@ from impact.stages.loads.plan import buildings
 
 #: the cases of one building: the bare building, then each damper type
 KINDS = ("bare", *DAMPER_KINDS)
-#: the linear cases, run once at Sa(T1) = 1 g and scaled to every level
+#: the cases linear on an elastic building, run once at Sa(T1) = 1 g and scaled to every level
 LINEAR = ("bare", "tmd")
 #: the earthquake study's keys the stage uses: its buildings, mass ratios and restitution
 LOADS_KEYS = ("storeys", "periods_s", "zeta", "mass_ratios", "e")
+
+
+def scales_linearly(building, kind: str) -> bool:
+    """Whether a case's response is linear in the level: a linear damper (LINEAR) on an elastic building; a building
+    that yields or feels P-delta is run at every level."""
+    return building.is_elastic and kind in LINEAR
 
 
 def motions(cfg: dict) -> list[str]:

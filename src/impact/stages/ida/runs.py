@@ -17,7 +17,7 @@ from impact.model.scene import GroundMotion, Scene
 from impact.model.suites import load_suite_record
 from impact.outputs.files import as_integers, flag
 from impact.outputs.labels import EVENT_CAP_MEANINGS
-from impact.stages.ida.plan import LINEAR, MEASURES, SCALED, WHOLE, ladder, motions
+from impact.stages.ida.plan import MEASURES, SCALED, WHOLE, ladder, motions, scales_linearly
 from impact.stages.loads.plan import impact_damper, make_building, tmd_damper
 
 INITIAL_CONDITION = "building and damper at rest; an impact damper's mass centred between its walls"
@@ -77,7 +77,8 @@ def bare_runs(cfg: dict, loads: dict, building_name: str) -> xr.Dataset:
     levels, records = ladder(cfg), _suite(cfg)
     sa = {key: spectral_acceleration(rec, building.period1) for key, rec in records.items()}
     columns = [over_ladder(lambda level, key=key: measure(building, (), scaled_motion(records[key], sa[key], level),
-                                                           cfg["storey_height_m"]), levels, linear=True)
+                                                           cfg["storey_height_m"]), levels,
+                               linear=scales_linearly(building, "bare"))
                for key in records]
     ds = _stack(columns, list(records), levels)
     ds["sa_record"] = ("motion", np.array([sa[k] for k in records]),
@@ -114,7 +115,8 @@ def damper_runs(cfg: dict, loads: dict, building_name: str, kind: str, bare: xr.
                   else impact_damper(kind, building, mr, gap_ratios[mr] * peak, loads["e"]))
         columns = [over_ladder(lambda level, key=key: measure(building, (damper,),
                                                                scaled_motion(records[key], sa[key], level),
-                                                               cfg["storey_height_m"]), levels, linear=kind in LINEAR)
+                                                               cfg["storey_height_m"]), levels,
+                               linear=scales_linearly(building, kind))
                    for key in records]
         part = _stack(columns, list(records), levels)
         if kind != "tmd":
