@@ -13,6 +13,11 @@ complementarity problem is solved by an active set; n identical units
 hitting together get identical impulses and move as one unit of their total
 mass.  Floors do not exchange impulses (the storeys are springs), so floors
 are independent.
+
+Both loops of the engine share from here what they decide at an event: whether
+a wall keeps holding a unit (stays), whether friction holds it on its floor
+(floor_decision), the plastic end of a rebound too slow to resolve
+(plastic_end), and the guard on a run's events (event_cap_reached).
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ import math
 import numpy as np
 from numba import njit
 
+from impact.engine import layout as L
 from impact.engine.layout import MODE_LOCKED
 
 #: relative velocity below which a rebound is treated as sticking, in units of the load's velocity scale
@@ -198,3 +204,27 @@ def floor_decision(kap, cq, pq, a_f):
     """slide_decision for a unit on a floor: sticking needs |x_f'' - a| <= a_f (row cq, pq)."""
     q, scale = derivatives_at0(kap, cq, pq)
     return slide_decision(q, scale, a_f, _ZERO_TOL)
+
+
+STALL_EVENTS, STALL_SPAN = 1000, 1e-9  # this many events within this fraction of a period: no progress
+
+
+@njit(cache=True, inline='always')
+def event_cap_reached(t, p, clock):
+    """Count the event in its period; True past the cap, or when STALL_EVENTS events in a row took less than
+    STALL_SPAN of a period (a loop that makes no progress: a bug, since chatter is resolved by sticking).
+
+    clock: the period index, its events so far, the time and count of the last stall check.
+    """
+    pi_now = math.floor(t / p[L.P_PERIOD])
+    if pi_now != clock[0]:
+        clock[0] = pi_now
+        clock[1] = 0.0
+    clock[1] += 1.0
+    clock[3] += 1.0
+    if clock[3] >= STALL_EVENTS:
+        if t - clock[2] < STALL_SPAN * p[L.P_PERIOD]:
+            return True
+        clock[2] = t
+        clock[3] = 0.0
+    return clock[1] > p[L.P_MAXEV]

@@ -44,7 +44,7 @@ import numpy as np
 from numba import njit
 
 from impact.engine import layout as L
-from impact.engine.contact import floor_decision, plastic_end, stays
+from impact.engine.contact import event_cap_reached, floor_decision, plastic_end, stays
 from impact.engine.events import first_exit
 from impact.engine.jitcache import ENGINE_CACHE, purge_stale_cache
 from impact.engine.segment import bound_tab, deriv_at0, kappa_powers
@@ -382,7 +382,6 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
     t_end = p[L.P_TEND]
     t_win = p[L.P_TWIN]
     period = p[L.P_PERIOD]
-    max_ev = p[L.P_MAXEV]
     a_f = 0.0
     if fric is not None:
         a_f = fric[0]
@@ -403,8 +402,7 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
             sigma = 1 if z[3] > z[1] else -1
     diag[L.D_E0] = _energy(z, p)
     diag[L.D_EMAX] = diag[L.D_E0]
-    count_period = 0.0
-    period_index = math.floor(t / period)
+    clock = np.array([math.floor(t / period), 0.0, t, 0.0])  # contact.event_cap_reached's
     nrec = rec.shape[0]
     irec = 0
     while t < t_end:
@@ -520,13 +518,7 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
         escape_v = 0
         if ev[0] > tau_max:
             break
-        # period bookkeeping for the event cap
-        pi_now = math.floor(t / period)
-        if pi_now != period_index:
-            period_index = pi_now
-            count_period = 0.0
-        count_period += 1.0
-        if count_period > max_ev:
+        if event_cap_reached(t, p, clock):  # the cap on events per period, and the stall guard
             diag[L.D_CAP] = 1.0
             break
         ev_side = int(ev[1])

@@ -39,7 +39,16 @@ from impact.engine.bundles import (
     Vectors,
     Workspace,
 )
-from impact.engine.contact import floor_decision, floor_mass, floor_row, plastic_end, solve_impulses, stays, stuck_row
+from impact.engine.contact import (
+    event_cap_reached,
+    floor_decision,
+    floor_mass,
+    floor_row,
+    plastic_end,
+    solve_impulses,
+    stays,
+    stuck_row,
+)
 from impact.engine.events import PEAK_RTOL, first_exit, peak_abs
 from impact.engine.jitcache import ENGINE_CACHE, purge_stale_cache
 from impact.engine.layout import (
@@ -75,7 +84,6 @@ from impact.engine.layout import (
     MODE_STUCK,
     NDIAG,
     NPOLY,
-    P_MAXEV,
     P_OMEGA,
     P_PERIOD,
     P_PHI,
@@ -125,13 +133,13 @@ from impact.engine.segment import (
     scene_key,
     state_from_exp,
     storey_drift,
+    storey_gravity,
 )
 
 EV_NONE, EV_WALL, EV_SLIDE_STOP, EV_RELEASE, EV_FLOOR_EXIT = 0, 1, 2, 3, 4
 EV_YIELD, EV_UNLOAD, EV_COLLAPSE = 5, 6, 7  # a storey's: the yield surface, its drift turning, the collapse limit
 _TOL = 1e-12  # contact tolerance, relative to the size of the gap function
 _ROUND_TOL = 1e-13  # 450 eps: the round-off of a difference of rows, relative to their terms' size
-STALL_EVENTS, STALL_SPAN = 1000, 1e-9  # this many events within this fraction of a period: no progress
 
 
 @njit(cache=True, inline='always')
@@ -1096,29 +1104,12 @@ def move_to_end(w, building, units, springs, fric, yld, tau):
     if yld is not None:
         plastic_flow(yld, q, diag)
     e_now = energy(building, units, springs, yld, nf, q, v)
+    if yld is not None:
+        # the balance's scale: P-delta's -P u^2 / (2h) is counted by its size, since a building falling over turns
+        # gravity's energy into motion while its total stays small
+        e_now += storey_gravity(yld, q)
     if e_now > diag[D_EMAX]:
         diag[D_EMAX] = e_now
-
-
-@njit(cache=True, inline='always')
-def event_cap_reached(t, p, clock):
-    """Count the event in its period; True past the cap, or when STALL_EVENTS events in a row took less than
-    STALL_SPAN of a period (a loop that makes no progress: a bug, since chatter is resolved by sticking).
-
-    clock: the period index, its events so far, the time and count of the last stall check.
-    """
-    pi_now = math.floor(t / p[P_PERIOD])
-    if pi_now != clock[0]:
-        clock[0] = pi_now
-        clock[1] = 0.0
-    clock[1] += 1.0
-    clock[3] += 1.0
-    if clock[3] >= STALL_EVENTS:
-        if t - clock[2] < STALL_SPAN * p[P_PERIOD]:
-            return True
-        clock[2] = t
-        clock[3] = 0.0
-    return clock[1] > p[P_MAXEV]
 
 
 @njit(cache=True)

@@ -745,3 +745,15 @@ def has_rigid_mode(cache, s):
         if cache.lam[s, k] == 0.0:
             return True
     return False
+
+
+@njit(cache=True, inline='always')
+def storey_gravity(yld, q):
+    """P u^2 / h summed over the storeys: twice the size of P-delta's energy, -P u^2 / (2h), which storey_energy
+    subtracts (what the energy balance's scale adds back, so that the scale counts it by its size)."""
+    g = yld.geometric
+    e = 0.0
+    for i in range(g.shape[0]):
+        u = storey_drift(q, i)
+        e += g[i] * u * u
+    return e
