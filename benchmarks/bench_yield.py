@@ -23,6 +23,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from bench_scene import best_time
 
 from impact.engine.scenes import simulate_scene
 from impact.model.building import Building
@@ -32,16 +33,6 @@ from impact.model.scene import Damper, GroundMotion, Scene
 YIELD_DRIFT_M, HARDENING = 0.01, 0.05
 PEER = {"period_s": 1.0, "zeta": 0.05, "yield_drift_m": 0.03, "pga_g": 0.5, "floor_mass_kg": 1.0e5}
 STEEL01_B = 1e-9  # OpenSees' Steel01 with b = 0 has a singular tangent after yield
-
-
-def best_time(fun, repeats: int):
-    out = fun()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fun()
-        times.append(time.perf_counter() - t0)
-    return min(times), out
 
 
 def engine_case(name: str, scene: Scene, repeats: int) -> dict:

@@ -120,6 +120,7 @@ def run_script(argv: list[str]) -> None:
         raise SystemExit("usage: python -m impact.kernels SCRIPT [ARGS]: runs SCRIPT under the study's kernel sets")
     apply()
     sys.argv = list(argv)
+    sys.path.insert(0, os.path.dirname(os.path.abspath(argv[0])))  # its own folder first, as `python SCRIPT` has
     runpy.run_path(argv[0], run_name="__main__")
 
 
