@@ -117,13 +117,14 @@ def draw_scene(rng, seconds: float = 3.0, reach: dict = REACH) -> tuple[Scene, f
 def draw_yielding_scene(rng, seconds: float = 3.0, reach: dict = REACH) -> tuple[Scene, float]:
     """A scene of draw_scene on a building that yields: yield drifts from a fifth of the motion's scale to twice it
     (so that most runs yield and some never do), hardening 0 (perfectly plastic) or up to 0.2, storeys 2.5 to 5 m
-    high, P-delta on half the buildings, and half the runs stopped at a collapse drift of 10 % of the height."""
+    high, P-delta on half the buildings, and a collapse drift of 10 % of the height on every P-delta building and
+    half the others."""
     scene, scale = draw_scene(rng, seconds, reach)
     n = scene.building.storeys
     hardening = 0.0 if rng.random() < 0.3 else float(rng.uniform(0.0, 0.2))
     building = scene.building.yielding(scale * 10 ** rng.uniform(-0.7, 0.3, n), hardening,
                                        storey_height=rng.uniform(2.5, 5.0, n), p_delta=bool(rng.random() < 0.5))
-    collapse = 0.1 if rng.random() < 0.5 else None
+    collapse = 0.1 if rng.random() < 0.5 or building.p_delta else None  # one can fall over only with P-delta
     return replace(scene, building=building, collapse_drift_ratio=collapse), scale
 
 

@@ -71,8 +71,8 @@ def _energy_residual(scene: Scene) -> float:
 ], ids=["cid", "tmd", "pid"])
 def test_energy_balances_with_yielding_storeys_and_a_damper(damper):
     building = Building.uniform(3, 1.0, 0.05).yielding(0.02, 0.03, storey_height=3.5, p_delta=True)
-    result = simulate_scene(_quake(building, dampers=(damper,)))
-    assert result.storeys.plastic_work > 0.0
+    result = simulate_scene(_quake(building, dampers=(damper,), collapse_drift_ratio=0.1))
+    assert result.storeys.plastic_work > 0.0 and not result.storeys.collapsed
     assert abs(result.diagnostics["energy_residual"]) <= 1e-9
     if damper.kind == "cid":
         assert result.impacts > 0
@@ -172,6 +172,17 @@ def test_bad_yield_input_is_refused_by_name(kw, field):
     assert field in str(err.value)
 
 
+def test_a_building_that_can_fall_over_needs_a_collapse_limit_and_a_near_zero_stiffness_is_refused():
+    b = Building.uniform(1, 1.5, 0.03, floor_mass=1e6)
+    geometric = 1e6 * G_GRAV / 3.0
+    soft = b.yielding(0.02, 0.5 * geometric / b.storey_stiffness[0], storey_height=3.0, p_delta=True)
+    with pytest.raises(ParameterError, match="give collapse_drift_ratio"):
+        _quake(soft)
+    flat = b.yielding(0.02, geometric / b.storey_stiffness[0], storey_height=3.0, p_delta=True)
+    with pytest.raises(ParameterError, match="post-yield stiffness"):
+        _quake(flat, collapse_drift_ratio=0.1)
+
+
 def test_a_perfectly_plastic_storey_needs_damping_and_collapse_needs_heights():
     undamped = Building.explicit([1.0], [1.0], storey_damping=[0.0])
     with pytest.raises(ParameterError, match="hardening = 0 without P-delta"):
@@ -229,3 +240,15 @@ def test_the_ida_scales_a_run_only_for_a_linear_damper_on_an_elastic_building():
     assert not scales_linearly(elastic, "cid")
     assert not scales_linearly(elastic.yielding(0.02), "bare")
     assert not scales_linearly(elastic.yielding(0.02, 0.1, storey_height=3.0, p_delta=True), "tmd")
+
+
+def test_a_softening_pushover_loses_its_strength_where_the_closed_form_says():
+    """b k < P/h: past yield the shear falls along b k - P/h and reaches zero at d_y + (k - P/h) d_y / (P/h - b k)."""
+    b = Building.uniform(1, 1.5, 0.03, floor_mass=1e6)
+    k, g = b.storey_stiffness[0], 1e6 * G_GRAV / 3.0
+    hb = 0.5 * g / k
+    curve = pushover(b.yielding(0.02, hb, storey_height=3.0, p_delta=True), 10.0)
+    assert curve.ended == "no lateral strength left"
+    assert curve.base_shear[1] == pytest.approx((k - g) * 0.02, rel=1e-12)
+    assert curve.roof_drift[-1] == pytest.approx(0.02 + (k - g) * 0.02 / (g - hb * k), rel=1e-9)
+    assert curve.base_shear[-1] == pytest.approx(0.0, abs=1e-9 * curve.base_shear[1])

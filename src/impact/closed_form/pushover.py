@@ -25,17 +25,24 @@ if TYPE_CHECKING:  # the command line reads PATTERNS at start, before it needs s
 PATTERNS = ("first-mode", "triangular", "uniform")
 
 
+#: why a push ends: the roof reached the drift asked; the base shear fell to zero; or a softening storey would have
+#: to move back while it yields (a snap-back, which no roof-displacement control can follow)
+ENDS = ("roof drift reached", "no lateral strength left", "snap-back")
+
+
 @dataclass
 class Pushover:
-    """The curve's corners: roof drift (m), base shear (N), and which storeys yield from each corner on."""
+    """The curve's corners: roof drift (m), base shear (N), which storeys yield from each corner on, and why the
+    push ended (one of ENDS)."""
 
     roof_drift: np.ndarray
     base_shear: np.ndarray
     yielding: list
+    ended: str = ENDS[0]
 
     def as_json(self) -> dict:
         return {"roof_drift_m": self.roof_drift.tolist(), "base_shear_N": self.base_shear.tolist(),
-                "yielding_storeys": self.yielding}
+                "yielding_storeys": self.yielding, "ended": self.ended}
 
 
 def pattern(building: Building, name: str) -> np.ndarray:
@@ -75,33 +82,42 @@ def pushover(building: Building, roof_drift: float, load_pattern: str = "first-m
     p = np.zeros_like(k)  # plastic offsets
     lam = 0.0
     yielding = np.zeros(len(k), dtype=bool)
+    sign = np.zeros(len(k))  # the side each yielding storey yields on
     drifts, shears, states = [0.0], [0.0], [[]]
+    ended = ENDS[0]
     while u.sum() < roof_drift * (1 - 1e-14):
-        yielding, dlam_dd, du_dd = _branches(k, b, geo, s, yielding)
+        yielding, dlam_dd, du_dd = _branches(k, b, geo, s, yielding, sign)
+        if np.any(yielding & (sign * du_dd < 0)):
+            ended = ENDS[2]
+            break
         step = roof_drift - u.sum()
-        # the next storey to reach its yield surface, loading outward on its elastic line
-        grows = ~yielding & (du_dd > 0)
-        to_yield = np.where(grows, (p + dy - u) / np.where(grows, du_dd, 1.0), np.inf)
+        # the next elastic storey to reach its yield surface, on either side, moving along its elastic line
+        elastic = ~yielding & (du_dd != 0)
+        room = np.where(du_dd > 0, p + dy - u, p - dy - u)
+        to_yield = np.where(elastic, room / np.where(elastic, du_dd, 1.0), np.inf)
         step = min(step, to_yield.min(initial=np.inf))
         if dlam_dd < 0:
             step = min(step, -lam / dlam_dd)
         u, lam = u + du_dd * step, lam + dlam_dd * step
-        p = np.where(yielding, u - dy, p)
-        hit = grows & (to_yield <= step * (1 + 1e-12))
+        p = np.where(yielding, u - sign * dy, p)
+        hit = elastic & (to_yield <= step * (1 + 1e-12))
+        sign = np.where(hit, np.sign(du_dd), sign)
         yielding = yielding | hit
         drifts.append(float(u.sum()))
         shears.append(float(lam))
         states.append([int(i) + 1 for i in np.flatnonzero(yielding)])
         if lam <= 1e-12 * max(shears):
+            ended = ENDS[1]
             break
-    return Pushover(np.array(drifts), np.array(shears), states)
+    return Pushover(np.array(drifts), np.array(shears), states, ended)
 
 
-def _branches(k, b, geo, s, yielding):
+def _branches(k, b, geo, s, yielding, sign):
     """Which yielding storeys keep yielding as the roof moves on, d lam / d D and each d u_i / d D.
 
-    Assume every storey on its surface yields; if lam must then fall, a yielding storey with a positive tangent
-    would move back and so unloads: drop it and solve again (each pass drops at least one).  A perfectly plastic
+    Assume every storey on its surface yields (on side sign); a storey with a positive tangent whose drift would
+    then move back (sign * d lam < 0, its shear falling) unloads: drop it and solve again (each pass drops at least
+    one).  One with a negative tangent moving back is a snap-back, which the caller ends the push on.  A perfectly plastic
     storey without P-delta (tangent 0) is a mechanism: lam stays, and the roof's drift goes into it (split evenly
     among several, which statics leaves undetermined)."""
     yielding = yielding.copy()
@@ -111,7 +127,7 @@ def _branches(k, b, geo, s, yielding):
         if flat.any():
             return yielding, 0.0, flat / flat.sum()
         dlam = 1.0 / np.sum(s / tangent)
-        unloading = yielding & (tangent > 0) & (dlam < 0)
+        unloading = yielding & (tangent > 0) & (sign * dlam < 0)
         if not unloading.any():
             return yielding, dlam, s * dlam / tangent
         yielding = yielding & ~unloading

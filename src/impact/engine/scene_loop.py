@@ -490,9 +490,11 @@ def _unload(yld, i, u):
 
 
 @njit(cache=True)
-def storey_jumps(yld, q, v, diag):
-    """After an impulse (the floors' velocities jumped): a yielding storey now moving inward unloads, and an elastic
-    storey on its yield surface now moving outward yields."""
+def storey_jumps(yld, q, v, diag, impulses):
+    """After an instant's events, whose impulses and plastic merges may have made the floors' velocities jump: a
+    yielding storey now moving inward unloads; and, after impacts (impulses), an elastic storey on its yield
+    surface now moving outward yields.  Not without impacts: a storey that has just unloaded sits on its surface
+    with a drift velocity of round-off size, whose sign would make it yield and unload again for ever."""
     branch, dy, offset = yld.branch, yld.yield_drift, yld.offset
     for i in range(branch.shape[0]):
         u = storey_drift(q, i)
@@ -500,7 +502,7 @@ def storey_jumps(yld, q, v, diag):
         if branch[i] != BRANCH_ELASTIC:
             if branch[i] * du < 0.0:
                 _unload(yld, i, u)
-        elif yld.escape[i] != 0 and yld.escape[i] * du > 0.0 and _on_surface(yld, i, q):
+        elif impulses and yld.escape[i] != 0 and yld.escape[i] * du > 0.0 and _on_surface(yld, i, q):
             side = yld.escape[i]
             branch[i] = side
             offset[i] = u - side * dy[i]
@@ -1123,8 +1125,7 @@ def handle_events(t, tau, model, springs, fric, harm, record, yld, st, scratch):
     n_hit = resolve_events(tau, model.building, model.units, fric, st, scratch.events, p[P_VSTICK], diag)
     if yld is not None:
         resolve_storeys(tau, yld, st.q, st.v, diag)
-        if n_hit > 0:
-            storey_jumps(yld, st.q, st.v, diag)
+        storey_jumps(yld, st.q, st.v, diag, n_hit > 0)  # an impact, or a resting unit's merge, moved a floor
     if n_hit > 0:
         diag[D_IMPACTS] += n_hit
         if t >= p[P_TWIN]:
@@ -1132,6 +1133,8 @@ def handle_events(t, tau, model, springs, fric, harm, record, yld, st, scratch):
         if n_hit > 1:
             diag[D_SIMULTANEOUS] += 1.0
     settle(t, model, springs, fric, harm, record, yld, st, scratch)
+    if yld is not None:
+        storey_jumps(yld, st.q, st.v, diag, False)  # settle's plastic merges move floors too
     if n_hit > 0:
         _record_impacts(t, model.units, st, scratch.events, v_before, scratch.recs, diag)
 

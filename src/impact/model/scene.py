@@ -276,18 +276,25 @@ class Scene:
         return np.cumsum(carried[::-1])[::-1] * self.gravity / b.storey_height
 
     def _check_tangents(self) -> None:
-        """Refuse a storey that P-delta leaves without elastic stiffness, or whose post-yield stiffness is near zero."""
+        """Refuse a storey whose elastic stiffness k - P/h, or post-yield stiffness b k - P/h, is near zero (a zero
+        post-yield stiffness is allowed only without P-delta: b = 0, a perfectly plastic storey), and a building
+        that can fall over (a negative post-yield stiffness) without a collapse limit to stop its run."""
         b = self.building
         for i, (ki, gi) in enumerate(zip(b.storey_stiffness, self.geometric_stiffness()), start=1):
-            if ki - gi <= 0.0:
-                raise ParameterError(f"storey {i}: P-delta's P/h = {gi:.6g} N/m outweighs its stiffness {ki:.6g} N/m: "
-                                     "the building cannot stand")
+            if ki - gi < MIN_TANGENT * ki:
+                raise ParameterError(f"storey {i}: P-delta's P/h = {gi:.6g} N/m leaves its stiffness {ki:.6g} N/m "
+                                     f"less than {MIN_TANGENT:g} of itself: the building cannot stand")
+            if b.yield_drift is None:
+                continue
             tangent = b.hardening * ki - gi
-            if b.yield_drift is not None and tangent != 0.0 and abs(tangent) < MIN_TANGENT * ki:
+            if abs(tangent) < MIN_TANGENT * ki and not (tangent == 0.0 and gi == 0.0):
                 raise ParameterError(
                     f"hardening = {b.hardening!r} leaves storey {i} a post-yield stiffness b k - P/h of "
-                    f"{tangent / ki:.2e} k: allowed 0 or at least {MIN_TANGENT:g} k in size (the exact flow loses "
-                    "digits near a zero stiffness; give b = 0 for perfectly plastic)")
+                    f"{tangent / ki:.2e} k: allowed 0 without P-delta (b = 0), else at least {MIN_TANGENT:g} k in "
+                    "size (the exact flow loses digits near a zero stiffness)")
+            if tangent < 0.0 and self.collapse_drift_ratio is None:
+                raise ParameterError(f"storey {i}'s post-yield stiffness b k - P/h is negative: once it yields its "
+                                     "drift can grow without bound, so give collapse_drift_ratio to stop the run")
 
 
 def paper_scene(kind: str, mu: float, beta: float, e: float, gap: float, r: float, *, rp: float = 0.0,
