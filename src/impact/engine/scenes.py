@@ -324,10 +324,9 @@ def _result(scene: Scene, arrays: dict, out: dict) -> SceneResult:
     diag = out["diag"]
     span = diag[L.D_TEND] - scene.t_window
     collapsed = bool(diag[L.D_COLLAPSE])
-    complete = not diag[L.D_CAP] and span > 0 and not collapsed
-    rms = math.sqrt(out["x2"][0] / span) if complete else math.nan
     # a collapse ends the run on purpose: its peaks up to the collapse stand, its window's rms does not
-    complete = complete or (collapsed and not diag[L.D_CAP])
+    complete = not diag[L.D_CAP] and (span > 0 or collapsed)
+    rms = math.sqrt(out["x2"][0] / span) if complete and not collapsed else math.nan
     records = None
     if out["recs"].shape[0]:
         n = int(diag[L.D_NREC])
