@@ -437,6 +437,22 @@ def test_units_sharing_a_wall_settle_instead_of_chattering_forever():
     assert abs(d["energy_residual"]) <= 1e-9
 
 
+def test_a_run_the_event_cap_stops_names_the_unit_and_the_wall_it_stopped_at(three_storey, el_centro):
+    """A CID in a 1 mm gap strikes many times a period; with the cap at 10 events a period the run stops, and
+    says at which unit's event: the unit is then on the wall it names."""
+    damper = Damper("cid", 3000.0, gap=0.001, e=0.5, units=2)
+    res = simulate_scene(Scene(three_storey, (damper,), el_centro, max_events_per_period=10))
+    d = res.diagnostics
+    assert d["event_cap_reached"] and d["stopped_by"] == "event cap"
+    assert d["stop_unit"] in (0, 1) and d["stop_storey"] == -1
+    assert d["stop_event"] in ("wall", "release") and d["stop_side"] in (-1, 1)
+    stroke = res.final_q[3 + d["stop_unit"]] - res.final_q[2]
+    assert stroke == pytest.approx(d["stop_side"] * damper.gap / 2, rel=1e-9)
+    done = simulate_scene(Scene(three_storey, (damper,), el_centro))
+    assert not done.diagnostics["event_cap_reached"] and done.diagnostics["stopped_by"] == ""
+    assert done.diagnostics["stop_unit"] == -1 and done.diagnostics["stop_event"] == ""
+
+
 def test_undamped_resonance_and_bad_windows_are_refused():
     with pytest.raises(ValueError, match="undamped mode"):
         simulate_scene(Scene(Building.paper(0.0), (Damper("cid", 0.01, gap=0.2, e=0.5),), Harmonic(0.1, 1.0),

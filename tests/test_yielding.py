@@ -126,6 +126,21 @@ def test_a_storey_at_rest_settles_to_its_residual_drift():
         np.testing.assert_allclose(drifts, res.storeys.residual_drifts, rtol=1e-6, atol=1e-9)
 
 
+def test_a_run_the_event_cap_stops_names_the_storey_and_the_surface_it_stopped_at():
+    """A bare building yielding back and forth under El Centro, the cap at 10 events a period: the run stops at
+    a storey's event, and that storey is then where the event puts it (on its yield surface for a yield, the
+    collapse limit never met)."""
+    b = Building.uniform(3, 1.0, 0.05).yielding(0.002, 0.05)
+    res = simulate_scene(_quake(b, pga_g=0.8, max_events_per_period=10))
+    d = res.diagnostics
+    assert d["stopped_by"] == "event cap" and d["stop_unit"] == -1
+    assert d["stop_storey"] in (1, 2, 3) and d["stop_event"] in ("yield", "unload")
+    i = d["stop_storey"] - 1
+    drift = np.diff(np.concatenate([[0.0], res.final_q]))[i]
+    if d["stop_event"] == "yield":
+        assert drift - res.storeys.plastic_offsets[i] == pytest.approx(d["stop_side"] * 0.002, rel=1e-9)
+
+
 def test_p_delta_beyond_the_post_yield_stiffness_collapses_and_stops_at_the_limit():
     """b k < P/h: past yield the storey's stiffness is negative, its mode grows, and the drift runs to the limit."""
     mass = 1e6

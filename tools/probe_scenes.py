@@ -4,16 +4,20 @@ reproduce each break.
 The scenes and the promises are the test suite's probe (``tests/probe.py``: uniform or uneven buildings, any gap
 and restitution, friction, harmonic, recorded, Kanai-Tajimi and wind loads; finished, finite, energy balanced, no
 unit through its wall, no dense sample above a certified peak), drawn wider (probe.WIDE: up to 10 storeys, 4 dampers
-of up to 12 units, where the suite's stop at 4, 3 and 6).  The suite runs 300 fixed scenes in a minute; this script
+of up to 12 units, where the suite's stop at 4, 3 and 6), and a share of them on buildings that yield
+(probe.draw_yielding_scene: perfectly plastic or hardening storeys, with and without P-delta and a collapse limit).  The suite runs 300 fixed scenes in a minute; this script
 runs as many as asked, in worker processes with a time bound per scene, with a new seed unless one is given, so
 that it keeps finding what the fixed 300 cannot.
 
     python tools/probe_scenes.py --scenes 3000                 # fresh seed, 2 workers
     python tools/probe_scenes.py --scenes 3000 --seed 12345    # the same scenes again
     python tools/probe_scenes.py --reproduce 12345 17          # one scene, in this process
+    python tools/probe_scenes.py --scenes 3000 --yielding 0    # elastic buildings only
 
 It prints, per class of break, how many scenes broke it and the worst few (seed and index, which is the
-reproducer: scene i of seed s is drawn from ``numpy.random.default_rng([s, i])``), and writes them all to
+reproducer: scene i of seed s is yielding if ``default_rng([s, i, 2]).random()`` is below the yielding share, and
+is drawn from ``numpy.random.default_rng([s, i, 1])`` if so, else from ``default_rng([s, i])``, so that a seed's
+elastic scenes are the ones it drew before yielding buildings existed), and writes them all to
 ``--out`` (JSON).  A scene that runs past ``--timeout`` seconds is a break of its own ("over the time bound").
 """
 
@@ -38,22 +42,31 @@ import numpy as np  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from probe import SAMPLES, WIDE, draw_scene, violations  # noqa: E402 (the path above first)
+from probe import SAMPLES, WIDE, draw_scene, draw_yielding_scene, violations  # noqa: E402 (the path above first)
 
 from impact.engine.run import simulate  # noqa: E402
 
+YIELDING_SHARE = 0.25  # of the scenes, on buildings that yield (--yielding)
 
-def scene_of(seed: int, index: int):
+
+def is_yielding(seed: int, index: int, share: float) -> bool:
+    return bool(np.random.default_rng([seed, index, 2]).random() < share)
+
+
+def scene_of(seed: int, index: int, share: float):
+    if is_yielding(seed, index, share):
+        return draw_yielding_scene(np.random.default_rng([seed, index, 1]), reach=WIDE)
     return draw_scene(np.random.default_rng([seed, index]), reach=WIDE)
 
 
-def run_one(seed: int, index: int) -> dict:
+def run_one(seed: int, index: int, share: float) -> dict:
     """One scene's run: its breaks, its time, and what kind of scene it is."""
+    yielding = is_yielding(seed, index, share)
     try:
-        scene, scale = scene_of(seed, index)
+        scene, scale = scene_of(seed, index, share)
     except Exception as exc:  # noqa: BLE001 (a drawn input the model refuses, by its checks)
         return {"seed": seed, "index": index, "seconds": 0.0, "storeys": None, "dampers": None, "load": None,
-                "broke": [f"refused as drawn, {type(exc).__name__}: {str(exc).splitlines()[0][:160]}"]}
+                "yielding": yielding, "broke": [f"refused as drawn, {type(exc).__name__}: {str(exc).splitlines()[0][:160]}"]}
     started = time.perf_counter()
     try:
         times = np.linspace(0.0, scene.t_end, SAMPLES)
@@ -63,7 +76,7 @@ def run_one(seed: int, index: int) -> dict:
         broke = [f"{type(exc).__name__}: {str(exc).splitlines()[0][:160]}"]
     return {"seed": seed, "index": index, "seconds": time.perf_counter() - started, "broke": broke,
             "storeys": scene.building.storeys, "dampers": [d.kind for d in scene.dampers],
-            "load": type(scene.load).__name__}
+            "load": type(scene.load).__name__, "yielding": yielding}
 
 
 def break_class(text: str) -> str:
@@ -86,19 +99,19 @@ def severity(text: str) -> float:
     return float("inf")
 
 
-def _worker(seed: int, conn) -> None:
+def _worker(seed: int, share: float, conn) -> None:
     """Runs the scenes the probe sends, one at a time, answering each on its own pipe."""
     for index in iter(conn.recv, None):
-        conn.send(run_one(seed, index))
+        conn.send(run_one(seed, index, share))
 
 
 class _Worker:
     """One worker process with a pipe of its own: no lock is shared with another worker, so killing one that
     overran its time bound cannot leave the others waiting on a lock it held."""
 
-    def __init__(self, ctx, seed: int):
+    def __init__(self, ctx, seed: int, share: float):
         self.conn, theirs = ctx.Pipe()
-        self.proc = ctx.Process(target=_worker, args=(seed, theirs), daemon=True)
+        self.proc = ctx.Process(target=_worker, args=(seed, share, theirs), daemon=True)
         self.proc.start()
         self.index, self.since = None, 0.0
 
@@ -111,12 +124,12 @@ class _Worker:
         self.proc.join()
 
 
-def probe(seed: int, scenes: int, workers: int, timeout: float) -> list[dict]:
+def probe(seed: int, share: float, scenes: int, workers: int, timeout: float) -> list[dict]:
     """Every scene's run, in worker processes; a scene still running after `timeout` seconds is recorded as such
     and its worker replaced (numba's compiled loop cannot be interrupted from inside)."""
     ctx = multiprocessing.get_context("spawn")
     todo = list(range(scenes - 1, -1, -1))
-    pool = [_Worker(ctx, seed) for _ in range(workers)]
+    pool = [_Worker(ctx, seed, share) for _ in range(workers)]
     done: list[dict] = []
     for worker in pool:
         worker.give(todo.pop())
@@ -134,9 +147,10 @@ def probe(seed: int, scenes: int, workers: int, timeout: float) -> list[dict]:
                 lost = f"over the time bound of {timeout:g} s"
             if lost:
                 done.append({"seed": seed, "index": worker.index, "seconds": time.monotonic() - worker.since,
-                             "storeys": None, "dampers": None, "load": None, "broke": [lost]})
+                             "storeys": None, "dampers": None, "load": None,
+                             "yielding": is_yielding(seed, worker.index, share), "broke": [lost]})
                 worker.stop()
-                pool[i] = worker = _Worker(ctx, seed)
+                pool[i] = worker = _Worker(ctx, seed, share)
             if worker.index is None and todo:
                 worker.give(todo.pop())
     for worker in pool:
@@ -148,9 +162,11 @@ def summary(runs: list[dict], worst: int = 5) -> dict:
     classes: dict = defaultdict(list)
     for run in runs:
         for text in run["broke"]:
-            classes[break_class(text)].append((severity(text), run["index"], text))
+            classes[break_class(text)].append((severity(text), run["index"], text, bool(run["yielding"])))
     return {name: {"scenes": len(hits), "per_thousand": 1000.0 * len(hits) / len(runs),
-                   "worst": [{"index": i, "break": text} for _, i, text in sorted(hits, reverse=True)[:worst]]}
+                   "yielding": sum(y for *_, y in hits),
+                   "worst": [{"index": i, "break": text, "yielding": y}
+                             for _, i, text, y in sorted(hits, reverse=True)[:worst]]}
             for name, hits in sorted(classes.items(), key=lambda kv: -len(kv[1]))}
 
 
@@ -160,32 +176,38 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=None, help="the probe's seed (default: a fresh one, printed)")
     ap.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
     ap.add_argument("--timeout", type=float, default=60.0, help="seconds one scene may run (default 60)")
+    ap.add_argument("--yielding", type=float, default=YIELDING_SHARE,
+                    help=f"share of the scenes on buildings that yield, 0 to 1 (default {YIELDING_SHARE})")
     ap.add_argument("--out", type=Path, default=Path("probe_scenes.json"), help="where the runs and classes go")
     ap.add_argument("--reproduce", nargs=2, type=int, metavar=("SEED", "INDEX"), help="run one scene and print it")
     args = ap.parse_args(argv)
+    if not 0.0 <= args.yielding <= 1.0:
+        ap.error(f"--yielding must be a share from 0 to 1, not {args.yielding}")
     if args.reproduce:
         seed, index = args.reproduce
-        scene, scale = scene_of(seed, index)
+        scene, scale = scene_of(seed, index, args.yielding)
         print(scene, f"\nmotion scale {scale:.3g} m")
-        print(json.dumps(run_one(seed, index), indent=1))
+        print(json.dumps(run_one(seed, index, args.yielding), indent=1))
         return 0
     seed = args.seed if args.seed is not None else secrets.randbits(32)
     started = time.perf_counter()
-    runs = probe(seed, args.scenes, args.workers, args.timeout)
+    runs = probe(seed, args.yielding, args.scenes, args.workers, args.timeout)
     classes = summary(runs)
     seconds = [r["seconds"] for r in runs]
-    report = {"seed": seed, "scenes": len(runs), "wall_seconds": time.perf_counter() - started,
+    report = {"seed": seed, "yielding_share": args.yielding, "scenes": len(runs),
+              "yielding_scenes": sum(bool(r["yielding"]) for r in runs), "wall_seconds": time.perf_counter() - started,
               "broken_scenes": sum(bool(r["broke"]) for r in runs), "classes": classes,
               "slowest": sorted(({"index": r["index"], "seconds": r["seconds"]} for r in runs),
                                 key=lambda r: -r["seconds"])[:10],
               "median_seconds": float(np.median(seconds)), "runs": runs}
     args.out.write_text(json.dumps(report, indent=1) + "\n")
-    print(f"seed {seed}: {len(runs)} scenes, {report['broken_scenes']} broke a promise "
-          f"({report['wall_seconds']:.0f} s; reproduce one with --reproduce {seed} INDEX)")
+    print(f"seed {seed}: {len(runs)} scenes ({report['yielding_scenes']} yielding), {report['broken_scenes']} broke "
+          f"a promise ({report['wall_seconds']:.0f} s; reproduce one with --reproduce {seed} INDEX "
+          f"--yielding {args.yielding})")
     for name, c in classes.items():
-        print(f"  {c['scenes']:5d} ({c['per_thousand']:.1f} per thousand)  {name}")
+        print(f"  {c['scenes']:5d} ({c['per_thousand']:.1f} per thousand, {c['yielding']} yielding)  {name}")
         for w in c["worst"][:3]:
-            print(f"          scene {w['index']}: {w['break']}")
+            print(f"          scene {w['index']}{' (yielding)' if w['yielding'] else ''}: {w['break']}")
     print(f"written to {args.out}")
     return 0
 

@@ -211,8 +211,9 @@ STALL_EVENTS, STALL_SPAN = 1000, 1e-9  # this many events within this fraction o
 
 @njit(cache=True, inline='always')
 def event_cap_reached(t, p, clock):
-    """Count the event in its period; True past the cap, or when STALL_EVENTS events in a row took less than
-    STALL_SPAN of a period (a loop that makes no progress: a bug, since chatter is resolved by sticking).
+    """Count the event in its period; layout.STOP_CAP past the cap, layout.STOP_STALL when STALL_EVENTS events in
+    a row took less than STALL_SPAN of a period (a loop that makes no progress: a bug, since chatter is resolved
+    by sticking), else 0.
 
     clock: the period index, its events so far, the time and count of the last stall check.
     """
@@ -224,7 +225,7 @@ def event_cap_reached(t, p, clock):
     clock[3] += 1.0
     if clock[3] >= STALL_EVENTS:
         if t - clock[2] < STALL_SPAN * p[L.P_PERIOD]:
-            return True
+            return L.STOP_STALL
         clock[2] = t
         clock[3] = 0.0
-    return clock[1] > p[L.P_MAXEV]
+    return L.STOP_CAP if clock[1] > p[L.P_MAXEV] else 0

@@ -41,9 +41,25 @@ _DIAGNOSTIC_FIELDS = (
 )
 
 
+STOPPED_BY = {0: "", L.STOP_CAP: "event cap", L.STOP_STALL: "stall guard"}
+
+
+def stop(diag) -> dict:
+    """Why a run stopped early ("" if it did not) and at which element's event: its unit (the index of the
+    impact records' unit column, damper by damper) or its storey (1 at the ground), the event's kind and side."""
+    by = STOPPED_BY[int(diag[L.D_CAP])]
+    element = int(diag[L.D_STOP_ELEMENT])
+    event = int(diag[L.D_STOP_EVENT])
+    storey = event in (L.EV_YIELD, L.EV_UNLOAD, L.EV_COLLAPSE)
+    return {"stopped_by": by, "stop_event": L.EVENT_NAMES[event] if by else "",
+            "stop_side": int(diag[L.D_STOP_SIDE]) if by else 0,
+            "stop_unit": element if by and not storey else -1, "stop_storey": element + 1 if by and storey else -1}
+
+
 def read_diagnostics(diag) -> dict:
-    """The counters, the penetration and the energy balance of a loop's diagnostics array."""
+    """The counters, the penetration and the energy balance of a loop's diagnostics array, and why it stopped."""
     out = {name: kind(diag[index]) for name, index, kind in _DIAGNOSTIC_FIELDS}
+    out.update(stop(diag))
     out["max_penetration"] = float(max(diag[L.D_PEN], 0.0))
     out.update(energy_balance(diag[L.D_WORK], diag[L.D_VISC], diag[L.D_IMPLOSS], diag[L.D_FRICTION],
                               diag[L.D_E0], diag[L.D_E1], diag[L.D_EMAX], diag[L.D_PLASTIC]))

@@ -79,13 +79,15 @@ def refine(kap, c, p, level, side, a, b, ha, hb):
 
 
 @njit(cache=True)
-def _escape_guess(h1, h2, h3, delta):
+def _escape_guess(h1, h2, h3, noise, delta):
+    """A first look for the clearance from h's derivatives at the edge; a derivative within its round-off
+    (noise) says nothing, and with none left the look starts from HMIN and doubles."""
     te = np.inf
-    if h1 != 0.0:
+    if abs(h1) > noise[0]:
         te = min(te, delta / abs(h1))
-    if h2 != 0.0:
+    if abs(h2) > noise[1]:
         te = min(te, math.sqrt(2.0 * delta / abs(h2)))
-    if h3 != 0.0:
+    if abs(h3) > noise[2]:
         te = min(te, (6.0 * delta / abs(h3)) ** (1.0 / 3.0))
     if not te < np.inf:
         te = HMIN
@@ -98,55 +100,103 @@ def _leave_boundary(kap, kpow, c, p, lo, hi, tau_max, escape, delta, out):
 
     For the first tiny steps h(tau) - h(0) is round-off, so separation is
     proven by the Taylor expansion at 0 with its remainder; once steps are
-    long enough, by direct evaluation.
+    long enough, by direct evaluation.  Either way the whole way to the clear
+    time is certified not to pass the edge by more than delta (_behind_edge), not
+    only its end: a release whose first three derivatives are round-off can move
+    inward, come back through the wall and be inside again by the time it is looked at.
     """
     edge = hi if escape > 0 else lo
     # the row meets its state to round-off of its terms, which an ill-conditioned modal basis (a stiff
     # pendulum beside a soft building) makes larger than delta: a start read beyond the edge must be
     # travelled back before the clearance counts, or the first step finds the edge it is leaving
-    behind = min(escape * (edge - deriv_at0(kap, c, p, 0)), 0.0)
+    h0 = deriv_at0(kap, c, p, 0)
+    behind = min(escape * (edge - h0), 0.0)
     h1 = deriv_at0(kap, c, p, 1)
     h2 = deriv_at0(kap, c, p, 2)
     h3 = deriv_at0(kap, c, p, 3)
+    m2 = bound_tab(kpow, c, p, 2, tau_max)
+    m3 = bound_tab(kpow, c, p, 3, tau_max)
     m4 = bound_tab(kpow, c, p, 4, tau_max)
     # before this, h cannot reach the far edge (|h - h(0)| <= |h'(0)| t + M2 t^2 / 2): a clearance seen
     # later could lie beyond it, in a gap the motion crosses faster than the derivatives at 0 suggest
-    te_far = _time_to_travel(hi - lo, abs(h1), bound_tab(kpow, c, p, 2, tau_max))
-    te = min(_escape_guess(h1, h2, h3, delta), te_far)
+    te_far = _time_to_travel(hi - lo, abs(h1), m2)
+    te = min(_escape_guess(h1, h2, h3, _rounding(kpow, c, p), delta), te_far, tau_max)
+    # g = escape h must stay below this on the way out: the edge, passed by no more than delta
+    limit = escape * edge + delta - behind
+    ta = 0.0  # certified up to here, with g and g' there
+    ga = escape * h0
+    dga = escape * h1
     last_clear = 0.0
     steps = 0.0
     while True:
+        steps += 1.0
+        pred = escape * (h1 * te + 0.5 * h2 * te * te + h3 * te * te * te / 6.0)
+        rise = te * (max(escape * h1, 0.0) + te * (0.5 * max(escape * h2, 0.0)
+                                                   + te * (max(escape * h3, 0.0) / 6.0 + te * m4 / 24.0)))
+        if behind - (pred + m4 * te ** 4 / 24.0) >= delta and rise < delta:
+            break  # clear at te, and no Taylor term can have carried h past the edge before it
+        if te > 1e3 * HMIN:
+            hb, dhb = eval2(kap, c, p, te)
+            clearance = escape * (edge - hb)
+            if clearance <= 0.0 and escape * dhb > 16.0 * _EPS * bound_tab(kpow, c, p, 1, te):
+                # back at the edge before separating by delta, and moving out by more than the round-off of
+                # h' (which is all a slope is this close to a release whose low derivatives vanish): a grazing
+                # contact
+                if last_clear > 0.0:
+                    hl, _ = eval2(kap, c, p, last_clear)
+                    te = refine(kap, c, p, edge, escape, last_clear, te, hl, hb)
+                return _touch(te, escape, steps, out)
+            if not _behind_edge(ga, dga, escape * hb, escape * dhb, te - ta, m2, m3, m4, limit):
+                mid = ta + 0.5 * (te - ta)
+                if te - ta > HMIN and ta < mid < te and mid > 1e3 * HMIN:
+                    te = mid  # too long a stride to certify from the last certified time
+                    continue
+                return _touch(te, escape, steps, out)  # no shorter stride certifies: the edge is met here
+            ta = te
+            ga = escape * hb
+            dga = escape * dhb
+            if clearance >= delta:
+                break
+            if clearance > 0.0:
+                last_clear = te
         if te >= tau_max:
             out[0] = np.inf
             out[1] = 0.0
             out[3] = steps
             return -1.0
-        steps += 1.0
-        pred = escape * (h1 * te + 0.5 * h2 * te * te + h3 * te * te * te / 6.0)
-        if behind - (pred + m4 * te ** 4 / 24.0) >= delta:
-            break
-        if te > 1e3 * HMIN:
-            hb, dhb = eval2(kap, c, p, te)
-            clearance = escape * (edge - hb)
-            if clearance >= delta:
-                break
-            if clearance > 0.0:
-                last_clear = te
-            elif escape * dhb > 0.0:
-                # back at the edge before separating by delta: a grazing contact
-                if last_clear > 0.0:
-                    hl, _ = eval2(kap, c, p, last_clear)
-                    te = refine(kap, c, p, edge, escape, last_clear, te, hl, hb)
-                out[0] = te
-                out[1] = escape
-                out[2] += 1.0
-                out[3] = steps
-                return -1.0
         if te >= te_far:
             break  # not yet clear: the search goes on from here, where a touch of the edge is a contact
-        te = min(2.0 * te, te_far)
+        te = min(2.0 * te, te_far, tau_max)
     out[3] = steps
     return te
+
+
+@njit(cache=True, inline='always')
+def _touch(te, escape, steps, out):
+    """The escape meets its edge again at te: a grazing contact, for first_exit to report (returns -1)."""
+    out[0] = te
+    out[1] = escape
+    out[2] += 1.0
+    out[3] = steps
+    return -1.0
+
+
+@njit(cache=True, inline='always')
+def _behind_edge(ga, dga, gb, dgb, w, m2, m3, m4, limit):
+    """g certified below limit on [0, w] from its values and slopes at both ends, by any of the module's
+    three bounds (g's second, third and fourth derivatives bounded by m2, m3, m4)."""
+    if max(ga, gb) + m2 * w * w / 8.0 < limit:
+        return True
+    if max(ga, gb) < limit and _one_sign(dga, dgb, m3, w) != 0:
+        return True
+    return _hermite_inside(ga, dga, gb, dgb, w, m4, -np.inf, limit)
+
+
+@njit(cache=True, inline='always')
+def _rounding(kpow, c, p):
+    """The round-off of h's first three derivatives at 0, from the sizes of their terms (bound_tab at 0)."""
+    return (16.0 * _EPS * bound_tab(kpow, c, p, 1, 0.0), 16.0 * _EPS * bound_tab(kpow, c, p, 2, 0.0),
+            16.0 * _EPS * bound_tab(kpow, c, p, 3, 0.0))
 
 
 @njit(cache=True)

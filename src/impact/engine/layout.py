@@ -36,7 +36,17 @@ D_FRICTION, D_SEGMENTS, D_SIMULTANEOUS, D_EMAX, D_PEAK_GAVE_UP = 15, 16, 17, 18,
 D_X2WIN = 20  # the paper loop's integral of x^2 over the window (its amplitude)
 # a yielding building's: the plastic work, the yield events, and whether a storey's drift passed its collapse limit
 D_PLASTIC, D_YIELDS, D_COLLAPSE = 21, 22, 23
-NDIAG = 24
+# a run stopped early (D_CAP: STOP_CAP or STOP_STALL): the element whose event it stopped at (a unit's index, or
+# a storey's for a storey's event), that event's kind (EV_*) and its side (+1 / -1, 0 for none)
+D_STOP_ELEMENT, D_STOP_EVENT, D_STOP_SIDE = 24, 25, 26
+NDIAG = 27
+STOP_CAP, STOP_STALL = 1, 2  # D_CAP: the cap on events per period, or the stall guard (no progress)
+
+# the events of the elements' table: a unit's (its walls, the end of a slide, the release from a wall, leaving the
+# floor it rests on) and a storey's (the yield surface, its drift turning, the collapse limit); their names
+EV_NONE, EV_WALL, EV_SLIDE_STOP, EV_RELEASE, EV_FLOOR_EXIT = 0, 1, 2, 3, 4
+EV_YIELD, EV_UNLOAD, EV_COLLAPSE = 5, 6, 7
+EVENT_NAMES = ("none", "wall", "slide stop", "release", "floor exit", "yield", "unload", "collapse")
 
 # impact record columns: their names in order, and each one's index.  x: the displacement of the unit's
 # floor; v, w: the floor's and the unit's velocities before (minus) and after (plus); stuck: whether the wall

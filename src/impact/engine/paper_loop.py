@@ -335,6 +335,19 @@ def _poly4(pp, p1, p2):
     pp[3] = 0.0
 
 
+@njit(cache=True, inline='always')
+def _event_kind(ev_kind, mode):
+    """The scene loop's name of this loop's event (layout.EV_*): its ev_kind 2 ends a slide, 1 is whatever
+    the mode's search looked for."""
+    if ev_kind == 2:
+        return L.EV_SLIDE_STOP
+    if mode == L.MODE_STUCK:
+        return L.EV_RELEASE
+    if mode == L.MODE_FLOOR:
+        return L.EV_FLOOR_EXIT
+    return L.EV_WALL
+
+
 def contact_code(mode, side, sigma):
     """One integer for a contact state (mode, side, sigma): what a run starts from and ends in."""
     return mode + 10 * (side + 1) + 100 * (sigma + 1)
@@ -518,8 +531,12 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
         escape_v = 0
         if ev[0] > tau_max:
             break
-        if event_cap_reached(t, p, clock):  # the cap on events per period, and the stall guard
-            diag[L.D_CAP] = 1.0
+        stop = event_cap_reached(t, p, clock)  # the cap on events per period, and the stall guard
+        if stop != 0:
+            diag[L.D_CAP] = stop
+            diag[L.D_STOP_ELEMENT] = 0.0  # the one unit
+            diag[L.D_STOP_EVENT] = _event_kind(ev_kind, mode)
+            diag[L.D_STOP_SIDE] = ev[1]
             break
         ev_side = int(ev[1])
         if fric is not None:

@@ -71,11 +71,22 @@ from impact.engine.layout import (
     D_SIMULTANEOUS,
     D_STEPS,
     D_STICKS,
+    D_STOP_ELEMENT,
+    D_STOP_EVENT,
+    D_STOP_SIDE,
     D_STUCKTIME,
     D_TEND,
     D_VISC,
     D_WORK,
     D_YIELDS,
+    EV_COLLAPSE,
+    EV_FLOOR_EXIT,
+    EV_NONE,
+    EV_RELEASE,
+    EV_SLIDE_STOP,
+    EV_UNLOAD,
+    EV_WALL,
+    EV_YIELD,
     KIND_PID,
     KIND_TMD,
     MODE_FLOOR,
@@ -136,8 +147,6 @@ from impact.engine.segment import (
     storey_gravity,
 )
 
-EV_NONE, EV_WALL, EV_SLIDE_STOP, EV_RELEASE, EV_FLOOR_EXIT = 0, 1, 2, 3, 4
-EV_YIELD, EV_UNLOAD, EV_COLLAPSE = 5, 6, 7  # a storey's: the yield surface, its drift turning, the collapse limit
 _TOL = 1e-12  # contact tolerance, relative to the size of the gap function
 _ROUND_TOL = 1e-13  # 450 eps: the round-off of a difference of rows, relative to their terms' size
 
@@ -454,13 +463,43 @@ def search_storeys(w, yld, horizon, ek_tau):
     return found
 
 
+@njit(cache=True, inline='always')
+def at_instant(tau_ev):
+    """The latest event time that still falls at the instant tau_ev (to 16 ulps)."""
+    return tau_ev * (1.0 + 16.0 * 2.220446049250313e-16) + 1e-300
+
+
+@njit(cache=True)
+def name_stop(tau_ev, ev_t, ev_kind, ev_side, yld, diag):
+    """Which element's event a run stopped at (layout.D_STOP_*): the first unit with an event at the instant
+    tau_ev, else the first storey (its kind of event tells a storey's index from a unit's)."""
+    limit = at_instant(tau_ev)
+    nu = ev_t.shape[0]
+    for j in range(nu):
+        if ev_t[j] <= limit:
+            _stop_at(j, ev_kind[j], ev_side[j], diag)
+            return
+    if yld is not None:
+        for i in range(yld.ev_t.shape[0]):
+            if yld.ev_t[i] <= limit:
+                _stop_at(i, yld.ev_kind[i], yld.ev_side[i], diag)
+                return
+
+
+@njit(cache=True, inline='always')
+def _stop_at(element, kind, side, diag):
+    diag[D_STOP_ELEMENT] = element
+    diag[D_STOP_EVENT] = kind
+    diag[D_STOP_SIDE] = side
+
+
 @njit(cache=True)
 def resolve_storeys(tau_ev, yld, q, v, diag):
     """Apply every storey's event at this instant (tau_ev into the segment): a storey reaching its yield surface
     moving outward yields (its offset set so that u - p is exactly s d_y); a yielding storey whose drift turns
     unloads elastically from the surface; a drift at the collapse limit ends the run (diag[D_COLLAPSE])."""
     branch, dy, offset, escape = yld.branch, yld.yield_drift, yld.offset, yld.escape
-    limit = tau_ev * (1.0 + 16.0 * 2.220446049250313e-16) + 1e-300
+    limit = at_instant(tau_ev)
     for i in range(branch.shape[0]):
         if not yld.ev_t[i] <= limit:
             continue
@@ -917,7 +956,7 @@ def resolve_events(tau_ev, building, units, fric, st, events, vstick, diag):
     ev_t, ev_side, ev_kind, hit, impulse, touched, floors_done = events
     nf = building.mass.shape[0]
     nu = um.shape[0]
-    limit = tau_ev * (1.0 + 16.0 * 2.220446049250313e-16) + 1e-300
+    limit = at_instant(tau_ev)
     for j in range(nu):
         hit[j] = False
         touched[j] = False
@@ -1263,8 +1302,10 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
             storeys_after_segment(yld, q, v)
         if not event:
             continue
-        if event_cap_reached(t, p, clock):
-            diag[D_CAP] = 1.0
+        stop = event_cap_reached(t, p, clock)
+        if stop != 0:
+            diag[D_CAP] = stop
+            name_stop(tau, ev_t, ev_kind, ev_side, yld, diag)
             break
         handle_events(t, tau, model, springs, fric, harm, record, yld, st, instant)
         if diag[D_COLLAPSE] != 0.0:
