@@ -267,3 +267,25 @@ def test_a_softening_pushover_loses_its_strength_where_the_closed_form_says():
     assert curve.base_shear[1] == pytest.approx((k - g) * 0.02, rel=1e-12)
     assert curve.roof_drift[-1] == pytest.approx(0.02 + (k - g) * 0.02 / (g - hb * k), rel=1e-9)
     assert curve.base_shear[-1] == pytest.approx(0.0, abs=1e-9 * curve.base_shear[1])
+
+
+def test_a_softening_storey_steeper_than_the_rest_of_the_building_ends_the_push_in_a_snap_back():
+    """Two storeys, P-delta on a heavy roof: past yield the first storey's tangent b k - P1/h is negative and
+    steeper than the elastic second storey's k - P2/h.  For the roof to move on, the shear would have to rise
+    (1 / d lam = s1 / t1 + s2 / t2 > 0), which would move the yielding storey back: a snap-back, where roof
+    displacement control cannot go.  The push ends there, at the first storey's yield."""
+    k, h, dy = 1e8, 3.0, 0.01
+    m = np.array([1e4, 0.8 * k * h / G_GRAV - 1e4])  # the first storey carries 0.8 k h of weight
+    stiffness = np.array([[2 * k, -k], [-k, k]])
+    b = Building(m, np.array([k, k]), 0.002 * stiffness).yielding(np.array([dy, 1.0]), 0.05, storey_height=h,
+                                                                    p_delta=True)
+    geometric = np.cumsum(m[::-1])[::-1] * G_GRAV / h
+    s = np.cumsum(pattern(b, "first-mode")[::-1])[::-1]  # the share of the pattern each storey carries
+    tangents = np.array([0.05 * k - geometric[0], k - geometric[1]])
+    assert np.sum(s / tangents) > 0  # the condition for a snap-back at the first storey's yield
+    curve = pushover(b, 0.5)
+    assert curve.ended == "snap-back"
+    yield_shear = (k - geometric[0]) * dy / s[0]
+    assert curve.base_shear[-1] == pytest.approx(yield_shear, rel=1e-12)
+    assert curve.roof_drift[-1] == pytest.approx(yield_shear * np.sum(s / (k - geometric)), rel=1e-12)
+    assert curve.yielding[-1] == [1]
