@@ -489,27 +489,15 @@ def cmd_verify_archive(args) -> dict:
 
 def cmd_compile(args) -> dict:
     """Compile every kernel the study runs into numba's on-disk cache, once (make setup runs it): each
-    specialisation of the scene loop, the paper loop for each damper, the virtual test rig."""
-    import itertools
+    specialisation of the scene loop on elastic buildings, the paper loop for each damper, the virtual test rig."""
     import time
 
-    import numpy as np
-
     from impact.engine.paper import ensure_compiled
-    from impact.engine.scenes import simulate_scene
-    from impact.model.building import Building
-    from impact.model.scene import Damper, GroundMotion, Harmonic, Scene
+    from impact.engine.scenes import compile_scene_loops
     from impact.stages.validation.rig import warm_up
 
     start = time.perf_counter()
-    building = Building.uniform(1, 1.0, 0.05)
-    mass = 0.02 * building.total_mass
-    loads = (Harmonic(1e3, building.omega1), GroundMotion(np.array([0.0, 1.0, -1.0, 0.0]), 0.1))
-    for springs, friction, load in itertools.product((False, True), (False, True), loads):
-        dampers = [Damper("cid", mass, gap=0.01, e=0.5, nu=0.1 if friction else 0.0)]
-        if springs:
-            dampers.append(Damper("pid", mass, gap=0.01, e=0.5))
-        simulate_scene(Scene(building, tuple(dampers), load, duration=0.5))
+    compile_scene_loops()
     for kind, friction in (("cid", False), ("cid", True), ("pid", False)):
         ensure_compiled(kind, friction)
     warm_up()

@@ -9,6 +9,7 @@ The scene itself (:mod:`impact.model.scene`) is plain data; this module assemble
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 
@@ -30,8 +31,9 @@ from impact.engine.contact import STICK_VELOCITY
 from impact.engine.diagnostics import read_diagnostics
 from impact.engine.jitcache import compile_lock
 from impact.engine.scene_loop import run_scene
+from impact.model.building import Building
 from impact.model.params import ParameterError
-from impact.model.scene import DAMPER_KINDS, ForceRecord, GroundMotion, Harmonic, Scene
+from impact.model.scene import DAMPER_KINDS, Damper, ForceRecord, GroundMotion, Harmonic, Scene
 
 CACHE_SLOTS = 16        # configurations whose eigen-data are kept at once
 
@@ -376,3 +378,17 @@ def _storey_response(scene: Scene, yld: YieldArrays | None, peak_drifts: np.ndar
 def amplitude(result: SceneResult) -> float:
     """The paper's amplitude sqrt(2) RMS of the roof over the window."""
     return result.amplitude
+
+
+def compile_scene_loops(yielding: tuple[bool, ...] = (False,)) -> None:
+    """Compile every specialisation of the scene loop (OPTIONAL_PARTS: with and without pendulums, friction, a
+    harmonic load, and each of `yielding`) into numba's cache, by one short run of each."""
+    building = Building.uniform(1, 1.0, 0.05)
+    mass = 0.02 * building.total_mass
+    loads = (Harmonic(1e3, building.omega1), GroundMotion(np.array([0.0, 1.0, -1.0, 0.0]), 0.1))
+    for springs, friction, load, yields in itertools.product((False, True), (False, True), loads, yielding):
+        dampers = [Damper("cid", mass, gap=0.01, e=0.5, nu=0.1 if friction else 0.0)]
+        if springs:
+            dampers.append(Damper("pid", mass, gap=0.01, e=0.5))
+        built = building.yielding(0.01, 0.1) if yields else building
+        simulate_scene(Scene(built, tuple(dampers), load, duration=0.5))
