@@ -4,6 +4,7 @@ errors with exit 2, and a drawn run."""
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 
@@ -34,7 +35,8 @@ def test_every_flag_with_a_default_says_it_in_its_help(command):
     for action in sub._actions:
         if action.option_strings and action.default not in (None, False, "==SUPPRESS=="):
             flag = action.option_strings[-1]
-            entry = body.split(f"\n  {flag}", 1)[1].split("\n  -", 1)[0]
+            # the flag's own entry: "--e" must not find "--equations"
+            entry = re.split(rf"\n  {re.escape(flag)}(?=[ ,\n])", body, maxsplit=1)[1].split("\n  -", 1)[0]
             assert "default" in " ".join(entry.split()), (command, flag, entry)
 
 

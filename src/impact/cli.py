@@ -18,7 +18,8 @@ from pathlib import Path
 
 from impact import __version__
 from impact.closed_form.pushover import PATTERNS as PUSHOVER_PATTERNS
-from impact.model.params import MAX_TUNING, STARTS, ParameterError, Protocol, System, ipc_label
+from impact.model.params import IMPACT_KINDS, MAX_TUNING, STARTS, ParameterError, Protocol, System, ipc_label
+from impact.model.scene import DAMPER_KINDS, Damper, GroundMotion, Scene, paper_scene_from_system
 
 DEFAULTS = dict(mu=0.01, beta=0.0048, e=0.25, gap_ratio=1.0, force_ratio=0.096)
 
@@ -72,7 +73,7 @@ PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
 def _model_flags(ap: argparse.ArgumentParser) -> None:
     g = ap.add_argument_group("model (model units: M = 1, omega = 1)")
-    g.add_argument("--damper", choices=("cid", "pid"), default="cid",
+    g.add_argument("--damper", choices=IMPACT_KINDS, default="cid",
                    help="classical (free mass) or pendulum impact damper")
     g.add_argument("--mu", type=_ranged(0, 10, lo_open=True), default=DEFAULTS["mu"],
                    help="mass ratio m/M, in (0, 10]")
@@ -163,7 +164,6 @@ def cmd_run(args) -> dict:
     The engine picks the loop (impact.engine.run.LOOPS): the paper loop for one unit, the scene loop for more.
     """
     from impact.engine.run import simulate
-    from impact.model.scene import paper_scene_from_system
 
     system = _system(args)
     scene = paper_scene_from_system(system, args.r, _protocol(args), units=args.units)
@@ -242,7 +242,6 @@ def _quake_damper_flags(args) -> dict:
 
 def _quake_damper(args, flags: dict, total_mass: float):
     """The Damper the flags describe: each flag used by the kind sets its field."""
-    from impact.model.scene import Damper
 
     fields = {_DAMPER_FIELD[name]: value for name, value in flags.items() if name in _DAMPER_FIELD}
     return Damper(args.damper, mass=flags["mu"] * total_mass, **fields)
@@ -314,7 +313,6 @@ def cmd_pushover(args) -> dict:
 def cmd_quake(args) -> dict:
     """A shear building under a ground-motion record, with or without a damper at one floor."""
     from impact.engine.run import simulate
-    from impact.model.scene import GroundMotion, Scene
 
     record = _quake_record(args)
     building = _building(args)
@@ -419,10 +417,15 @@ def _default_charts() -> Path:
 
 
 def cmd_design(args) -> dict | str:
-    """The smallest damper on the charts that meets --target-xm, checked by one direct simulation."""
-    from impact.model.scene import DAMPER_KINDS
+    """The smallest damper on the charts that meets --target-xm, checked by one direct simulation; with
+    --equations, the design equations' answer instead."""
     from impact.stages.design import DesignError, design, load_charts
 
+    if args.equations:
+        answer = _design_equations(args)
+        return answer if args.json else _equations_text(answer)
+    if args.target_xm is None:
+        raise ParameterError("--target-xm is required (or ask the design equations with --equations)")
     charts = load_charts(args.charts or _default_charts(), (args.damper,) if args.damper else DAMPER_KINDS)
     try:
         answer = design(charts, args.target_xm, amplitude_range=args.amplitude_range, refinement=args.refinement)
@@ -430,6 +433,57 @@ def cmd_design(args) -> dict | str:
         print(f"impact design: {exc}", file=sys.stderr)
         raise SystemExit(2) from None
     return answer if args.json else _design_text(answer)
+
+
+def _design_equations(args) -> dict:
+    """The design equation of --damper (the CID by default) at the flags' design, with the chart's own optimum
+    beside it when the charts hold that design (its mu, e, r' on their grid and their damping)."""
+    from impact.stages.design import load_charts
+    from impact.stages.design.equations.formulas import Point, evaluate, tmd_equations
+
+    kind = args.damper or "cid"
+    if kind == "tmd":
+        return tmd_equations(args.mu, args.beta)
+    answer = evaluate(kind, Point(args.mu, args.e, args.beta, args.rp if kind == "pid" else 0.0))
+    try:
+        chart = load_charts(args.charts or _default_charts(), (kind,))[kind]
+    except ParameterError:
+        return answer | {"chart": None}
+    return answer | {"chart": _chart_optimum(chart, answer)}
+
+
+def _chart_optimum(chart, answer: dict) -> dict | None:
+    """The chart's best gap ratio and X_m at the answer's design, if the chart holds it (else None)."""
+    if abs(float(chart.attrs["beta"]) - answer["beta"]) > 1e-12:
+        return None
+    at = {}
+    for name in chart["X_m_best"].dims:
+        grid = chart[name].values
+        match = [v for v in grid if abs(v - answer[name]) <= 1e-9 * max(abs(v), 1.0)]
+        if not match:
+            return None
+        at[name] = match[0]
+    return {"gap_ratio": float(chart["gap_ratio_best"].sel(at)), "X_m": float(chart["X_m_best"].sel(at)),
+            "gap_step": float(chart["gap_ratio"].values[1] - chart["gap_ratio"].values[0])}
+
+
+def _equations_text(a: dict) -> str:
+    """The design equation's answer as a person reads it."""
+    if a["damper"] == "tmd":
+        return (f"TMD, mu = {a['mu']:g}: Den Hartog's tuning f = {a['tuning']:.4f}, damping beta_t = "
+                f"{a['damping']:.4f}; X_m there {a['X_m']:.4f} (exact, linear closed form)")
+    lines = [f"{a['damper'].upper()}, mu = {a['mu']:g}, e = {a['e']:g}, beta = {a['beta']:g}"
+             + (f", r' = {a['rp']:g}" if "rp" in a else ""),
+             f"  optimum gap ratio g = {a['gap_ratio']:.3f}, X_m = {a['X_m']:.4f} (within {a['error_bound']:.1%} of "
+             f"simulation at every point checked; on the points held out of the fit, {a['error_held_out_max']:.1%} "
+             f"at most and {a['error_held_out_p95']:.1%} on 95 % of them)"]
+    if a["plateau"]:
+        lines.append(f"  X_m within {a['plateau_tolerance']:.0%} of the optimum for g in {a['plateau'][0]:.3f} to "
+                     f"{a['plateau'][1]:.3f} (a bound)")
+    if a.get("chart"):
+        lines.append(f"  the chart: g = {a['chart']['gap_ratio']:g} (its grid's step {a['chart']['gap_step']:g}), "
+                     f"X_m = {a['chart']['X_m']:.4f}")
+    return "\n".join(lines)
 
 
 def _design_text(a: dict) -> str:
@@ -536,7 +590,7 @@ def build_parser() -> argparse.ArgumentParser:
     qk.add_argument("--pga-g", type=_ranged(0, 10, lo_open=True), default=None,
                     help="scale the record to this peak ground acceleration in g, in (0, 10] (default: as recorded)")
     _building_flags(qk)
-    qk.add_argument("--damper", choices=("none", "cid", "pid", "tmd"), default="none", help="the damper")
+    qk.add_argument("--damper", choices=("none", *DAMPER_KINDS), default="none", help="the damper")
     qk.add_argument("--mu", type=_ranged(0, 10, lo_open=True), default=None,
                     help=f"damper mass over the building's total mass, in (0, 10] (default {QUAKE_DEFAULTS['mu']}: the "
                          "earthquake study's larger mass ratio; impact run's 0.01 is the paper's)")
@@ -592,10 +646,21 @@ def build_parser() -> argparse.ArgumentParser:
                          "summary: the per-frequency values are in the file")
     sw.set_defaults(func=cmd_sweep)
 
-    ds = sub.add_parser("design", help="the smallest damper on the design charts that meets a target X_m")
-    ds.add_argument("--target-xm", type=_ranged(0, 100, lo_open=True), required=True,
-                    help="largest acceptable X_m = x_max / A_max, in (0, 100]")
-    ds.add_argument("--damper", choices=("cid", "pid", "tmd"), default=None,
+    ds = sub.add_parser("design", help="the smallest damper on the design charts that meets a target X_m, or "
+                                       "with --equations the design equations' optimum gap and X_m")
+    ds.add_argument("--target-xm", type=_ranged(0, 100, lo_open=True), default=None,
+                    help="largest acceptable X_m = x_max / A_max, in (0, 100] (required without --equations)")
+    ds.add_argument("--equations", action="store_true",
+                    help="the design equations (docs/design-equations.md) at --mu, --e, --beta (--rp): the optimum "
+                         "gap ratio, X_m there, its plateau and stated error, beside the chart's answer where the "
+                         "charts hold the design; for the TMD, Den Hartog's tuning and damping")
+    ds.add_argument("--mu", type=_ranged(0, 10, lo_open=True), default=DEFAULTS["mu"],
+                    help="with --equations: mass ratio")
+    ds.add_argument("--e", type=_ranged(0, 1), default=DEFAULTS["e"], help="with --equations: restitution")
+    ds.add_argument("--beta", type=_ranged(0, 1, lo_open=True, hi_open=True), default=DEFAULTS["beta"],
+                    help="with --equations: structural damping ratio")
+    ds.add_argument("--rp", type=_ranged(0, 1e3, lo_open=True), default=1.0, help="with --equations: PID tuning r'")
+    ds.add_argument("--damper", choices=DAMPER_KINDS, default=None,
                     help="the damper type (default: the lightest of the three)")
     ds.add_argument("--amplitude-range", type=_ranged(0, 1e3, lo_open=True), nargs=2, metavar=("LO", "HI"),
                     default=None, help="also meet the target for force amplitudes LO to HI times the design "

@@ -203,6 +203,12 @@ def robustness_params(wildcards):
     return {key: config[key] for key in ("robustness", "structure", "protocol")}
 
 
+def design_chart_params():
+    """What a chart's numbers depend on: not the design equations fitted on it."""
+    design = {key: value for key, value in DESIGN.items() if key != "equations"}
+    return {"structure": config["structure"], "protocol": config["protocol"], "design": design}
+
+
 def design_curve_params(wildcards):
     """Only what one chart sweep's numbers depend on."""
     spec = next(c[wildcards.curve] for c in DESIGN_CURVES.values() if wildcards.curve in c)
