@@ -11,6 +11,12 @@ printed beside them.
 
     python benchmarks/bench_scene.py [--quick] [--out benchmarks/results/scene.json]
 
+Beside the scene core on the bare 1- and 3-storey buildings: the same buildings under the same record by a
+compiled exact discrete propagator (x_{k+1} = A x_k + B0 a_k + B1 a_{k+1}, the matrix exponential with a
+first-order hold, exact for a piecewise-linear record; peaks sampled at the record's steps, not certified), the
+floor a sample's cost could reach; and OpenSees' linear Newmark (average acceleration) at the record's step on
+the 3-storey building, the peer's cost for the same run (skipped, and said so, without openseespy).
+
 Target (issue: real structures under real loads): <= 10 ms per El Centro run
 of the 3-storey building with a CID.
 """
@@ -22,6 +28,10 @@ import json
 import platform
 import time
 from pathlib import Path
+
+import numpy as np
+from numba import njit
+from scipy.linalg import expm
 
 from impact.engine.paper import simulate
 from impact.engine.scenes import simulate_scene
@@ -42,6 +52,92 @@ def best_time(fun, repeats: int):
     return min(times), out
 
 
+def first_order_hold(building: Building, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(A, B0, B1) of x = (q, q') under M q'' + C q' + K q = -M 1 a(t), a linear over each step of dt.
+
+    One exponential of the system augmented by the input and its slope (Van Loan): x(dt) = E11 x + E12 a_k +
+    E13 (a_{k+1} - a_k) / dt."""
+    n = building.storeys
+    m_inv = np.diag(1.0 / building.masses)
+    f = np.block([[np.zeros((n, n)), np.eye(n)], [-m_inv @ building.stiffness, -m_inv @ building.damping]])
+    g = np.concatenate([np.zeros(n), -np.ones(n)])
+    aug = np.zeros((2 * n + 2, 2 * n + 2))
+    aug[:2 * n, :2 * n] = f
+    aug[:2 * n, 2 * n] = g
+    aug[2 * n, 2 * n + 1] = 1.0
+    e = expm(aug * dt)
+    b1 = e[:2 * n, 2 * n + 1] / dt
+    return e[:2 * n, :2 * n].copy(), e[:2 * n, 2 * n] - b1, b1
+
+
+@njit(cache=True)
+def propagate(a_mat, b0, b1, accel, roof):
+    """The peak |q_roof| over the record's samples, from rest."""
+    x = np.zeros(a_mat.shape[0])
+    y = np.empty_like(x)
+    peak = 0.0
+    for k in range(accel.shape[0] - 1):
+        for i in range(x.shape[0]):
+            acc = b0[i] * accel[k] + b1[i] * accel[k + 1]
+            for j in range(x.shape[0]):
+                acc += a_mat[i, j] * x[j]
+            y[i] = acc
+        x[:] = y
+        peak = max(peak, abs(x[roof]))
+    return peak
+
+
+def propagator_case(name: str, building: Building, gm: GroundMotion, repeats: int) -> dict:
+    a_mat, b0, b1 = first_order_hold(building, gm.dt)
+    seconds, peak = best_time(lambda: propagate(a_mat, b0, b1, gm.accel, building.storeys - 1), repeats)
+    out = {"case": name, "ms_per_run": 1e3 * seconds, "impacts": 0, "samples": len(gm.accel),
+           "ns_per_sample": 1e9 * seconds / len(gm.accel), "peak_roof_displacement": peak}
+    print(json.dumps(out))
+    return out
+
+
+def opensees_case(name: str, building: Building, gm: GroundMotion) -> dict | None:
+    """OpenSees' linear Newmark (average acceleration) at the record's step: one run, the analysis loop timed."""
+    try:
+        import openseespy.opensees as ops
+    except ImportError:
+        print(json.dumps({"case": name, "skipped": "openseespy is not installed (make peer installs it)"}))
+        return None
+    n = building.storeys
+    ops.wipe()
+    ops.logFile("/dev/null", "-noEcho")  # the full eigensolver's warning that it is slow (it is not, for n modes)
+    ops.model("basic", "-ndm", 1, "-ndf", 1)
+    ops.node(0, 0.0)
+    ops.fix(0, 1)
+    for i in range(1, n + 1):
+        ops.node(i, 0.0)
+        ops.mass(i, float(building.masses[i - 1]))
+        ops.uniaxialMaterial("Elastic", i, float(building.storey_stiffness[i - 1]))
+        ops.element("zeroLength", i, i - 1, i, "-mat", i, "-dir", 1)
+    # the engine's damping: the same ratio in every mode (every mode of the model: the full eigensolver)
+    ops.eigen("-fullGenLapack", n)
+    ops.modalDamping(building.zeta)
+    ops.timeSeries("Path", 1, "-dt", gm.dt, "-values", *gm.accel.tolist())
+    ops.pattern("UniformExcitation", 1, 1, "-accel", 1)
+    ops.constraints("Plain")
+    ops.numberer("Plain")
+    ops.system("BandGeneral")
+    ops.algorithm("Linear")
+    ops.integrator("Newmark", 0.5, 0.25)
+    ops.analysis("Transient")
+    steps = len(gm.accel) - 1
+    peak = 0.0
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        ops.analyze(1, gm.dt)
+        peak = max(peak, abs(ops.nodeDisp(n, 1)))
+    seconds = time.perf_counter() - t0
+    ops.wipe()
+    out = {"case": name, "ms_per_run": 1e3 * seconds, "impacts": 0, "peak_roof_displacement": peak}
+    print(json.dumps(out))
+    return out
+
+
 def scene_case(name: str, scene: Scene, repeats: int) -> dict:
     seconds, res = best_time(lambda: simulate_scene(scene), repeats)
     d = res.diagnostics
@@ -59,12 +155,16 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default="benchmarks/results/scene.json")
     args = ap.parse_args(argv)
     reps = 2 if args.quick else 7
+    one = Building.uniform(1, 1.0, 0.02)
     three = Building.uniform(3, 1.0, 0.02)
     five = Building.uniform(5, 2.0, 0.02)
     el_centro = GroundMotion.from_record(load_record("elcentro"), pga_g=0.35)
     cid = Damper("cid", 0.02 * three.total_mass, gap=0.05, e=0.5)
     cases = [
-        scene_case("3 storeys, bare, El Centro 0.35 g", Scene(three, (), el_centro), reps),
+        propagator_case("1 storey, bare, El Centro 0.35 g, exact propagator", one, el_centro, reps),
+        scene_case("1 storey, bare, El Centro 0.35 g, scene core", Scene(one, (), el_centro), reps),
+        propagator_case("3 storeys, bare, El Centro 0.35 g, exact propagator", three, el_centro, reps),
+        scene_case("3 storeys, bare, El Centro 0.35 g, scene core", Scene(three, (), el_centro), reps),
         scene_case("3 storeys, CID at the roof, El Centro 0.35 g", Scene(three, (cid,), el_centro), reps),
         scene_case("3 storeys, CID in 4 units, El Centro 0.35 g",
                    Scene(three, (Damper("cid", cid.mass, gap=0.05, e=0.5, units=4),), el_centro), reps),
@@ -84,13 +184,21 @@ def main(argv=None) -> int:
              "scene_over_specialised": general["ms_per_run"] / (1e3 * t_old)}
     print(json.dumps(paper))
     cases += [general, paper]
+    peer = opensees_case("3 storeys, bare, El Centro 0.35 g, OpenSees linear Newmark at the record's step", three,
+                         el_centro)
+    cases += [peer] if peer else []
+    for size in ("1 storey", "3 storeys"):
+        core, exact = (next(c for c in cases if c["case"].startswith(size) and c["case"].endswith(end))
+                       for end in ("scene core", "exact propagator"))
+        print(json.dumps({"case": f"{size}, bare: scene core over exact propagator",
+                          "ratio": core["ms_per_run"] / exact["ms_per_run"]}))
     report = {"cases": cases, "machine": {"python": platform.python_version(), "processor": platform.processor(),
                                           "machine": platform.machine()}, "packages": package_versions()}
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(json.dumps(report, indent=1) + "\n")
     print(f"\n{'case':62s} {'ms/run':>9s} {'segments':>9s} {'impacts':>8s} {'us/seg':>8s}")
     for c in cases:
-        print(f"{c['case']:62s} {c['ms_per_run']:9.2f} {c.get('segments', 0):9d} {c['impacts']:8d} "
+        print(f"{c['case'][:62]:62s} {c['ms_per_run']:9.2f} {c.get('segments', 0):9d} {c['impacts']:8d} "
               f"{c.get('us_per_segment', float('nan')):8.2f}")
     return 0
 

@@ -51,7 +51,7 @@ def test_the_per_segment_steps_are_inlined_and_take_the_segment_work():
                 read |= {a.attr for a in ast.walk(node) if isinstance(a, ast.Attribute)
                          and isinstance(a.value, ast.Name) and a.value.id == "w"}
     assert read <= set(bundles.SEGMENT_WORK_FIELDS)
-    assert {"kap", "C", "P", "diag", "mon_peak", "work", "cache"} <= read
+    assert {"kap", "C", "P", "diag", "mon_peak", "wf", "wc", "lam", "cache"} <= read
 
 
 def test_a_synthetic_engine_folder_with_a_long_signature_is_caught(tmp_path):
@@ -67,3 +67,20 @@ def test_a_bundle_is_read_by_name_and_by_position_alike():
     kind, floor, mass, load, gap, restitution = units
     assert (units.kind[0], units.gap[0], units.restitution[0]) == (kind[0], gap[0], restitution[0]) == (0.0, 4.0, 5.0)
     assert bundles.RunState._fields[:7] == ("mode", "side", "sigma", "offset", "escape", "escape_v", "check")
+
+
+def test_a_borrowed_view_is_its_owners_memory():
+    """bundles.borrowed: the same data, shape and strides (writes reach the owner), for 1 to 3 dimensions and a
+    strided view; the scene loop's arrays travel borrowed, so a wrong stride here would move every result."""
+    from numba import njit
+
+    @njit
+    def write_through(a, i, value):
+        view = bundles.borrowed(a)
+        view.flat[i] = value
+        return view.shape, view.strides, view.sum()
+
+    for a in (np.arange(5.0), np.arange(12.0).reshape(3, 4), np.arange(24.0).reshape(2, 3, 4)[:, ::2]):
+        shape, strides, total = write_through(a, 1, 100.0)
+        assert (shape, strides) == (a.shape, a.strides)
+        assert a.flat[1] == 100.0 and total == a.sum()

@@ -21,7 +21,9 @@ from __future__ import annotations
 from collections import namedtuple
 
 from numba import types
+from numba.core import cgutils
 from numba.experimental import structref
+from numba.extending import intrinsic
 
 #: the storeys: floor masses, storey stiffness and damping matrices
 BuildingArrays = namedtuple("BuildingArrays", "mass stiffness damping")
@@ -102,6 +104,13 @@ Workspace = namedtuple("Workspace", "seg rows vecs events tables")
 InstantScratch = namedtuple("InstantScratch", "seg_work cursor events v_before recs diag")
 
 
+#: the arrays of the cache (ConfigCache's fields but key), the modal tables (ModalTables' but key) and the
+#: scratch (work's floats and complexes), each a field of SegmentWork of its own.  Reading a namedtuple out of a
+#: structref counts a reference for every array it holds and its fields again: reading w.cache.lam counts twelve
+#: where w.lam counts one.  The steps on every segment read these; w.cache stays for has_rigid_mode and settle
+FLAT_FIELDS = "size lam vec vinv kinv damping dof load forced mass gvis lmod mvec mbnd wf wc"
+
+
 @structref.register
 class SegmentWorkType(types.StructRef):
     def preprocess_fields(self, fields):
@@ -118,12 +127,43 @@ class SegmentWork(structref.StructRefProxy):
     offsets before the segment, mode weights wt), each unit's next event (ev_t ev_side ev_kind),
     build_segment's scratch, the modal tables, the configuration cache, the load vector, the run's state
     (RunState's arrays but check), and what the segment writes (diagnostics, the monitors' peaks,
-    their times, the window's square).
+    their times, the window's square).  Its arrays are borrowed views (borrowed): `owner` holds what they are
+    views of, for as long as the SegmentWork lives.
     """
 
 
 SEGMENT_WORK_FIELDS = ("kap C P ek pair single kpow cs ps cq pq cm pm cv pv cu pu stack found cu1 aw s_before wt "
                        "ev_t ev_side ev_kind work mtab cache load_vec mode side sigma offset escape escape_v q v "
-                       "diag mon_peak mon_peak_t mon_x2").split()
+                       "diag mon_peak mon_peak_t mon_x2 " + FLAT_FIELDS + " owner").split()
 structref.define_proxy(SegmentWork, SegmentWorkType, SEGMENT_WORK_FIELDS)
 
+
+
+@intrinsic
+def borrowed(typingctx, arr):
+    """A view of the array that holds no reference to its memory: the same data, shape and strides, no meminfo.
+
+    numba counts a reference, atomically, each time a step reads an array out of a structref or binds one to an
+    inlined step's argument, and its pruning pass removes only the counts it can pair within simple blocks: on a
+    bare building those counts were 75 % of the scene loop's time (about 130 pairs per segment, found with
+    gdb on NRT_incref).  A borrowed view's counts test a null pointer and return.  It is safe while its owner
+    lives: numba frees an array after its owner's last use, not at the end of the function, so whatever holds
+    borrowed views holds their owner too (SegmentWork's `owner`: the run's workspace and state, which no step
+    reads), or borrows from the function's arguments, which its caller holds.
+    """
+    if not isinstance(arr, types.Array):
+        return None
+
+    def codegen(context, builder, sig, args):
+        src = context.make_array(arr)(context, builder, value=args[0])
+        out = context.make_array(arr)(context, builder)
+        out.meminfo = cgutils.get_null_value(out.meminfo.type)
+        out.parent = cgutils.get_null_value(out.parent.type)
+        out.nitems = src.nitems
+        out.itemsize = src.itemsize
+        out.data = src.data
+        out.shape = src.shape
+        out.strides = src.strides
+        return out._getvalue()
+
+    return arr(arr), codegen

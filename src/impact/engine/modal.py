@@ -181,9 +181,8 @@ def amplitude_moduli(n, wc, aw):
 def monitor_row(w, s, m, n, monitors, r0, r1, harmonic):
     """Coefficient row of monitor m, into w.cm and w.pm, from the modal amplitudes wc[2n:4n] (the harmonic slots
     from C); w: bundles.SegmentWork."""
-    wc, C, kap, P, cm, pm = w.work[1], w.C, w.kap, w.P, w.cm, w.pm
+    wc, C, kap, P, cm, pm, mvec = w.wc, w.C, w.kap, w.P, w.cm, w.pm, w.mvec
     mon_rows, mon_kind, mon_rec = monitors.rows, monitors.kind, monitors.record_coef
-    mvec = w.mtab.mvec
     nt = kap.shape[0]
     for k in range(nt):
         cm[k] = 0.0
@@ -225,7 +224,7 @@ def end_values(ek, c, p, big_t):
 def curvature_bound(w, s, m, n, big_t, harmonic):
     """Bound on |h''| over [0, T] of monitor m's (halved) row w.cm, w.pm: the tabulated modal part, then the rest."""
     aw, wt, cm, pm, kpow = w.aw, w.wt, w.cm, w.pm, w.kpow
-    mbnd = w.mtab.mbnd
+    mbnd = w.mbnd
     acc = 0.0
     for k in range(2 * n):
         acc += wt[k] * mbnd[s, m, k] * aw[k]
@@ -259,16 +258,14 @@ def square_integral(c, p, wt, pair, single, big_t):
 def integrate_modal(w, s, n, tau, units, record, r0, r1):
     """Exact work of a record load, viscous dissipation and stuck time over [0, tau], from the modal tables.
 
-    work: build_segment's scratch, with the modal amplitudes w in work[1][2n:4n] and the particular
-    solution's (constant) reduced velocities u1 in work[0][2n:3n]; cu1: scratch of the reduced size;
+    w.wf, w.wc: build_segment's scratch, with the modal amplitudes w in wc[2n:4n] and the particular
+    solution's (constant) reduced velocities u1 in wf[2n:3n]; cu1: scratch of the reduced size;
     wt: the segment's mode weights (mode_weights), which halve the sums over k;
     pair, single: integral_tables over tau; pu: (2, NPOLY) scratch; all of them fields of w (bundles.SegmentWork).
     """
-    work, cu1, wt, mode, load_vec, P, pu, diag = w.work, w.cu1, w.wt, w.mode, w.load_vec, w.P, w.pu, w.diag
-    pair, single, mtab, cache = w.pair, w.single, w.mtab, w.cache
-    gvis, lmod = mtab.gvis, mtab.lmod
-    lam, vec, cred = cache.lam, cache.vec, cache.damping
-    wf, wc = work
+    cu1, wt, mode, load_vec, P, pu, diag = w.cu1, w.wt, w.mode, w.load_vec, w.P, w.pu, w.diag
+    pair, single, gvis, lmod, lam, vec, cred = w.pair, w.single, w.gvis, w.lmod, w.lam, w.vec, w.damping
+    wf, wc = w.wf, w.wc
     W = 2 * n
     U1 = 2 * n
     if tau > 0.0:

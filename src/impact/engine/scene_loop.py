@@ -28,16 +28,23 @@ import numpy as np
 from numba import njit
 
 from impact.engine.bundles import (
+    BuildingArrays,
+    ConfigCache,
     Events,
     InstantScratch,
+    ModalTables,
+    MonitorArrays,
     Rows,
     RunState,
+    SceneArrays,
     Segment,
     SegmentWork,
     StepTables,
     Tables,
+    UnitArrays,
     Vectors,
     Workspace,
+    borrowed,
 )
 from impact.engine.contact import (
     event_cap_reached,
@@ -1197,6 +1204,58 @@ def _start(t, model, springs, fric, harm, record, yld, st, scratch, out):
 
 
 @njit(cache=True)
+def borrowed_model(model):
+    """The scene's arrays, borrowed (bundles.borrowed): binding a bundle to an inlined step's argument counts a
+    reference for each array it holds, and the run's steps bind the building, the units and the monitors on
+    every segment."""
+    b = borrowed
+    p, building, units, load_vec, monitors = model
+    return SceneArrays(b(p), BuildingArrays(b(building.mass), b(building.stiffness), b(building.damping)),
+                       UnitArrays(b(units.kind), b(units.floor), b(units.mass), b(units.load), b(units.gap),
+                                  b(units.restitution)), b(load_vec),
+                       MonitorArrays(b(monitors.rows), b(monitors.kind), b(monitors.record_coef), b(monitors.cap)))
+
+
+@njit(cache=True)
+def borrowed_state(st):
+    """The run's state, every array borrowed (bundles.borrowed)."""
+    b = borrowed
+    return RunState(b(st.mode), b(st.side), b(st.sigma), b(st.offset), b(st.escape), b(st.escape_v), b(st.check),
+                    b(st.q), b(st.v))
+
+
+@njit(cache=True)
+def _instant_scratch(w, ws, out):
+    """What the steps at an event's instant work in (bundles.InstantScratch), its arrays borrowed."""
+    b = borrowed
+    ev = ws.events
+    events = Events(b(ev.t), b(ev.side), b(ev.kind), b(ev.hit), b(ev.impulse), b(ev.touched), b(ev.floors_done))
+    return InstantScratch(w, b(ws.tables.cursor), events, b(ws.vecs.v_before), b(out.recs), b(out.diag))
+
+
+@njit(cache=True)
+def _segment_work(ws, st, out, cache, load_vec):
+    """The SegmentWork of a run: its workspace, state, outputs, cache and load vector, every array borrowed
+    (bundles.borrowed: reading a borrowed array counts no reference).  It holds the workspace and the state as
+    its owner; the outputs, the cache and the load vector are run_scene's arguments, which its caller holds."""
+    b = borrowed
+    seg, rows, vecs, ev = ws.seg, ws.rows, ws.vecs, ws.events
+    mtab, work = ws.tables.modal, ws.tables.work
+    cache_b = ConfigCache(b(cache.key), b(cache.size), b(cache.lam), b(cache.vec), b(cache.vinv), b(cache.kinv),
+                          b(cache.damping), b(cache.dof), b(cache.load), b(cache.forced), b(cache.mass))
+    mtab_b = ModalTables(b(mtab.key), b(mtab.gvis), b(mtab.lmod), b(mtab.mvec), b(mtab.mbnd))
+    return SegmentWork(b(seg.kap), b(seg.C), b(seg.P), b(seg.ek), b(seg.pair), b(seg.single), b(seg.kpow),
+                       b(rows.cs), b(rows.ps), b(rows.cq), b(rows.pq), b(rows.cm), b(rows.pm), b(rows.cv), b(rows.pv),
+                       b(rows.cu), b(rows.pu), b(vecs.stack), b(vecs.found), b(vecs.reduced), b(vecs.moduli),
+                       b(vecs.s_before), b(vecs.wt), b(ev.t), b(ev.side), b(ev.kind), (b(work[0]), b(work[1])),
+                       mtab_b, cache_b, b(load_vec), b(st.mode), b(st.side), b(st.sigma), b(st.offset),
+                       b(st.escape), b(st.escape_v), b(st.q), b(st.v), b(out.diag), b(out.peak), b(out.peak_t),
+                       b(out.x2), cache_b.size, cache_b.lam, cache_b.vec, cache_b.vinv, cache_b.kinv,
+                       cache_b.damping, cache_b.dof, cache_b.load, cache_b.forced, cache_b.mass, mtab_b.gvis,
+                       mtab_b.lmod, mtab_b.mvec, mtab_b.mbnd, b(work[0]), b(work[1]), (ws, st))
+
+
+@njit(cache=True)
 def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
     """One run from p[P_T0] to p[P_TEND], its results written into out (bundles.RunOutputs); returns the number
     of impact records written.
@@ -1206,6 +1265,7 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
     that the run fills; yld: a yielding building's bundles.YieldArrays (None for an elastic one), whose state
     the run advances from where it is and leaves as its result.
     """
+    model = borrowed_model(model)
     p, building, units, load_vec, monitors = model
     nf = building.mass.shape[0]
     nu = units.mass.shape[0]
@@ -1215,21 +1275,20 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
                   np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64),
                   start.q.copy(), start.v.copy())
     # the steps inlined on every segment take one structref of the arrays they work in (impact.engine.bundles)
+    w = _segment_work(ws, st, out, cache, load_vec)
     kap, C, P, ek, pair, single, kpow = ws.seg
-    cs, ps, cq, pq, cm, pm, cv, pv, cu, pu = ws.rows
-    stack, found, qs, vs, _, cu1, aw, s_before, wt = ws.vecs
+    _, _, qs, vs, _, _, aw, _, wt = ws.vecs
     ev_t, ev_side, ev_kind = ws.events.t, ws.events.side, ws.events.kind
     mtab, dtab, work, cursor = ws.tables
-    mode, side, sigma, offset, escape, escape_v = st.mode, st.side, st.sigma, st.offset, st.escape, st.escape_v
+    mode, escape, escape_v = st.mode, st.escape, st.escape_v
     q, v = st.q, st.v
-    diag, mon_peak, mon_peak_t, mon_x2, ts, samples = out.diag, out.peak, out.peak_t, out.x2, out.ts, out.samples
-    w = SegmentWork(kap, C, P, ek, pair, single, kpow, cs, ps, cq, pq, cm, pm, cv, pv, cu, pu, stack, found, cu1, aw,
-                    s_before, wt, ev_t, ev_side, ev_kind, work, mtab, cache, load_vec, mode, side, sigma, offset,
-                    escape, escape_v, q, v, diag, mon_peak, mon_peak_t, mon_x2)
-    instant = InstantScratch(w, cursor, ws.events, ws.vecs.v_before, out.recs, out.diag)
+    diag, ts, samples = out.diag, out.ts, out.samples
+    # the compiled steps at an event's instant take the state and their scratch borrowed too (w holds the owners)
+    instant = _instant_scratch(w, ws, out)
+    st_b = borrowed_state(st)
     t = p[P_T0]
     t_end = p[P_TEND]
-    _start(t, model, springs, fric, harm, record, yld, st, instant, out)
+    _start(t, model, springs, fric, harm, record, yld, st_b, instant, out)
     its = 0  # the next sample time
     while its < ts.shape[0] and ts[its] < t:
         its += 1
@@ -1307,7 +1366,7 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
             diag[D_CAP] = stop
             name_stop(tau, ev_t, ev_kind, ev_side, yld, diag)
             break
-        handle_events(t, tau, model, springs, fric, harm, record, yld, st, instant)
+        handle_events(t, tau, model, springs, fric, harm, record, yld, st_b, instant)
         if diag[D_COLLAPSE] != 0.0:
             break
         slot_key = -1  # settle may have filled (and so replaced) cache slots

@@ -391,7 +391,7 @@ def build_segment(w, s, units, springs, fric, yld, harmonic, load_at, omega):
 
     load_at = (theta0, r0, r1): r0 + r1 tau is the record's value on the segment (per unit of load_vec);
     harmonic: the load is sin(theta0 + omega tau) per unit of load_vec.
-    w.work = (floats, complexes): scratch of 7 and 4 times the largest reduced size, so that a
+    w.wf, w.wc (floats, complexes): scratch of 7 and 4 times the largest reduced size, so that a
     segment allocates nothing; the modal amplitudes are left in complexes[2n:4n] and the particular
     solution's velocity in floats[2n:3n] (the modal shortcuts read them).
     yld: a yielding building's storeys (bundles.YieldArrays), whose constant forces join the load; where a perfectly
@@ -399,10 +399,10 @@ def build_segment(w, s, units, springs, fric, yld, harmonic, load_at, omega):
     (_modal_particular), and through K^-1 as for an elastic building everywhere else, which a stiff pendulum's
     ill-conditioned eigenbasis does not reach.
     """
-    mode, offset, sigma, q, v, kap, C, P, work = w.mode, w.offset, w.sigma, w.q, w.v, w.kap, w.C, w.P, w.work
+    mode, offset, sigma, q, v, kap, C, P = w.mode, w.offset, w.sigma, w.q, w.v, w.kap, w.C, w.P
     theta0, r0, r1 = load_at
     nf = C.shape[0] - units.mass.shape[0]
-    keys, nr, lam, vec, vinv, kinv, cred, fidx, ellr, zc, mred = w.cache
+    nr, lam, vec, vinv, kinv, cred, fidx, ellr, zc = w.size, w.lam, w.vec, w.vinv, w.kinv, w.damping, w.dof, w.load, w.forced
     ufloor, um, uload = units.floor, units.mass, units.load
     n = nr[s]
     nt = kap.shape[0]
@@ -415,7 +415,7 @@ def build_segment(w, s, units, springs, fric, yld, harmonic, load_at, omega):
         kap[nt - 1] = -1j * omega
     # scratch by offset, not by slices: a slice is a new array object on every segment
     # (wf: g0 | g1 | u1 | qp | tmp | dz, the state minus the particular solution; wc[2n:4n]: amplitudes)
-    wf, wc = work
+    wf, wc = w.wf, w.wc
     G0, G1, U1, QP, TMP, DZ = 0, n, 2 * n, 3 * n, 4 * n, 5 * n
     for i in range(n):
         wf[G0 + i] = ellr[s, i] * r0
@@ -444,7 +444,7 @@ def build_segment(w, s, units, springs, fric, yld, harmonic, load_at, omega):
             for j in range(n):
                 wf[QP + i] += kinv[s, i, j] * wf[TMP + j]
     else:
-        _modal_particular(n, s, lam, vec, vinv, mred, wf)
+        _modal_particular(n, s, lam, vec, vinv, w.mass, wf)
     ph = np.exp(1j * theta0)
     for i in range(n):
         full = fidx[s, i]
