@@ -446,7 +446,8 @@ def test_identical_units_that_start_apart_and_fall_into_step_end_as_one_unit_of_
 #: reproduces them.)
 AT_SCALE_SEED = 3761029462
 OPEN_AT_SCALE = {(AT_SCALE_SEED, 2135): "penetration", (AT_SCALE_SEED, 1232): "sample above a certified peak",
-                 (AT_SCALE_SEED, 2512): "energy residual", (2870437391, 1235): "penetration"}
+                 (AT_SCALE_SEED, 2512): "energy residual", (2870437391, 1235): "penetration",
+                 (1500758912, 751): "penetration"}
 
 
 def test_units_started_on_their_walls_beside_a_sliding_unit_leave_them_and_the_run_goes_on():
