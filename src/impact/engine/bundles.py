@@ -107,7 +107,8 @@ InstantScratch = namedtuple("InstantScratch", "seg_work cursor events v_before r
 #: the arrays of the cache (ConfigCache's fields but key), the modal tables (ModalTables' but key) and the
 #: scratch (work's floats and complexes), each a field of SegmentWork of its own.  Reading a namedtuple out of a
 #: structref counts a reference for every array it holds and its fields again: reading w.cache.lam counts twelve
-#: where w.lam counts one.  The steps on every segment read these; w.cache stays for has_rigid_mode and settle
+#: where w.lam counts one.  The steps on every segment read these; w.cache stays whole for has_rigid_mode and
+#: settle, which take the bundle
 FLAT_FIELDS = "size lam vec vinv kinv damping dof load forced mass gvis lmod mvec mbnd wf wc"
 
 
@@ -133,7 +134,7 @@ class SegmentWork(structref.StructRefProxy):
 
 
 SEGMENT_WORK_FIELDS = ("kap C P ek pair single kpow cs ps cq pq cm pm cv pv cu pu stack found cu1 aw s_before wt "
-                       "ev_t ev_side ev_kind work mtab cache load_vec mode side sigma offset escape escape_v q v "
+                       "ev_t ev_side ev_kind cache load_vec mode side sigma offset escape escape_v q v "
                        "diag mon_peak mon_peak_t mon_x2 " + FLAT_FIELDS + " owner").split()
 structref.define_proxy(SegmentWork, SegmentWorkType, SEGMENT_WORK_FIELDS)
 
