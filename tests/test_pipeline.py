@@ -243,8 +243,8 @@ def _job_stats(out: str) -> dict[str, int]:
 
 def test_the_papers_scope_skips_exactly_the_stages_beyond_it():
     """config/paper.yaml over the full configuration (make paper): every job of the paper's stages, none
-    of Table 1 in numbers, the design charts, the loads or the incremental dynamic analysis."""
-    beyond = {"robustness", "design", "loads", "ida"}
+    of Table 1 in numbers, the design charts, the loads, the incremental dynamic analysis or the collapse stage."""
+    beyond = {"robustness", "design", "loads", "ida", "collapse"}
     full = _job_stats(_snakemake(ROOT, "-n", "--forceall").stdout)
     paper = _job_stats(_snakemake(ROOT, "-n", "--forceall", "--configfile", "config/config.yaml",
                                   "config/paper.yaml").stdout)
@@ -302,7 +302,8 @@ def test_an_engine_edit_reruns_exactly_the_jobs_whose_scripts_reach_it(smoke):
     # outdated one is outdated for its inputs; Snakemake then names that reason alone)
     assert changed and changed <= reaching, sorted(changed - reaching)
     assert {"sweep_curve", "design_sweep", "continuation_curve", "ensemble_curve", "masri_check",
-            "validation_cases", "numerics_work_precision_piece", "loads_damper", "robustness_design", "ida_damper"} <= planned
+            "validation_cases", "numerics_work_precision_piece", "loads_damper", "robustness_design", "ida_damper",
+            "collapse_damper"} <= planned
     assert not {"tmd_optimum", "masri_chart"} & planned
 
 

@@ -19,6 +19,7 @@ from impact.stages.numerics.plan import stability_families, work_precision_piece
 from impact.outputs.provenance import git_state
 from impact.stages.loads import plan as loads
 from impact.stages.ida import plan as ida
+from impact.stages.collapse import plan as collapse
 from impact.model.params import IMPACT_KINDS
 from impact.model.scene import DAMPER_KINDS
 from impact.stages.design import chart_specs
@@ -71,6 +72,7 @@ SECTIONS = {
     "design": "08. Design charts",
     "loads": "09. Earthquakes and wind on real buildings",
     "ida": "10. Incremental dynamic analysis on the FEMA P695 suites",
+    "collapse": "11. Collapse of yielding buildings (FEMA P695)",
 }
 
 
@@ -147,6 +149,11 @@ if IDA:
     ida.check_config(IDA, LOADS)
 IDA_BUILDINGS = ida.stage_buildings(LOADS) if IDA else []
 IDA_KINDS = list(DAMPER_KINDS)
+# collapse: the ida stage's buildings made to yield, with its ground motions and damper designs
+COLLAPSE = stage_config("collapse")
+if COLLAPSE:
+    collapse.check_config(COLLAPSE, IDA, LOADS)
+COLLAPSE_BUILDINGS = IDA_BUILDINGS if COLLAPSE else []
 COEXISTENCE_CURVES = config.get("coexistence", {}).get("curves", [])
 COEXISTENCE_MODES = config.get("coexistence", {}).get("modes", ["continuation_up", "continuation_down"])
 
@@ -229,6 +236,16 @@ def ida_params(wildcards):
     """What the stage's runs depend on: its section but the verdicts' and fits' settings, and the loads keys it uses."""
     kept = {key: value for key, value in IDA.items() if key not in ("verdict", "drift_limits")}
     return {"ida": kept, "loads": {key: LOADS[key] for key in ida.LOADS_KEYS}}
+
+
+def collapse_params(wildcards):
+    """What the stage's runs depend on: its section but the tables' settings, and the ida and loads keys it uses."""
+    kept = {key: value for key, value in COLLAPSE.items() if key not in ("ratings", "verdict")}
+    return {
+        "collapse": kept,
+        "ida": {key: IDA[key] for key in collapse.IDA_KEYS},
+        "loads": {key: LOADS[key] for key in collapse.LOADS_KEYS},
+    }
 
 
 def ida_design(wildcards):

@@ -32,17 +32,19 @@ ENDS = ("roof drift reached", "no lateral strength left", "snap-back")
 
 @dataclass
 class Pushover:
-    """The curve's corners: roof drift (m), base shear (N), which storeys yield from each corner on, and why the
-    push ended (one of ENDS)."""
+    """The curve's corners: roof drift (m), base shear (N), which storeys yield from each corner on, each storey's
+    drift at each corner (m; corners x storeys) and why the push ended (one of ENDS)."""
 
     roof_drift: np.ndarray
     base_shear: np.ndarray
     yielding: list
+    storey_drift: np.ndarray
     ended: str = ENDS[0]
 
     def as_json(self) -> dict:
         return {"roof_drift_m": self.roof_drift.tolist(), "base_shear_N": self.base_shear.tolist(),
-                "yielding_storeys": self.yielding, "ended": self.ended}
+                "yielding_storeys": self.yielding, "storey_drift_m": self.storey_drift.tolist(),
+                "ended": self.ended}
 
 
 def pattern(building: Building, name: str) -> np.ndarray:
@@ -83,7 +85,7 @@ def pushover(building: Building, roof_drift: float, load_pattern: str = "first-m
     lam = 0.0
     yielding = np.zeros(len(k), dtype=bool)
     sign = np.zeros(len(k))  # the side each yielding storey yields on
-    drifts, shears, states = [0.0], [0.0], [[]]
+    drifts, shears, states, storey_drifts = [0.0], [0.0], [[]], [u.copy()]
     ended = ENDS[0]
     while u.sum() < roof_drift * (1 - 1e-14):
         yielding, dlam_dd, du_dd = _branches(k, b, geo, s, yielding, sign)
@@ -106,10 +108,11 @@ def pushover(building: Building, roof_drift: float, load_pattern: str = "first-m
         drifts.append(float(u.sum()))
         shears.append(float(lam))
         states.append([int(i) + 1 for i in np.flatnonzero(yielding)])
+        storey_drifts.append(u.copy())
         if lam <= 1e-12 * max(shears):
             ended = ENDS[1]
             break
-    return Pushover(np.array(drifts), np.array(shears), states, ended)
+    return Pushover(np.array(drifts), np.array(shears), states, np.array(storey_drifts), ended)
 
 
 def _branches(k, b, geo, s, yielding, sign):

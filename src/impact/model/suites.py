@@ -64,6 +64,12 @@ def is_suite_key(key: str) -> bool:
     return isinstance(key, str) and key.startswith(PREFIX)
 
 
+def record_of(motion: str) -> str:
+    """The record a ground motion is a component of (its key without the component): resampling keeps a record's two
+    components together, as they are not independent."""
+    return motion.rsplit(":", 1)[0]
+
+
 def parse_key(key: str) -> tuple[str, int, str]:
     """(suite, record id, component) of a key, or a RecordError naming the key and what is allowed."""
     parts = key.removeprefix(PREFIX).split(":")

@@ -9,7 +9,7 @@ from scipy import stats
 
 from impact.model.suites import GROUPS
 from impact.outputs.labels import label
-from impact.outputs.plotting import DAMPER_COLORS, plt, save_atomic
+from impact.outputs.plotting import DAMPER_COLORS, plt, save_all
 
 CASE_COLORS = {"bare": "k", **DAMPER_COLORS}
 GROUP_COLORS = dict(zip(GROUPS, ("#1b9e77", "#d95f02", "#7570b3")))
@@ -91,6 +91,4 @@ def plot_ida_building(ds, fits: pd.DataFrame, building: str, cfg: dict, outputs)
         ax.set_axis_off()
     fig.suptitle(f"Incremental dynamic analysis, {label(building)}: {len(ds['motion'])} FEMA P695 ground motions "
                  f"(thin: one each; median and 16/84 % fractiles)", fontsize=10)
-    for out in outputs:
-        save_atomic(fig, out)
-    plt.close(fig)
+    save_all(fig, outputs)

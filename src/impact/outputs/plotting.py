@@ -81,9 +81,7 @@ def plot_figure(fig_cfg: dict, datasets: dict, tmd: dict | None, outputs) -> Non
     for ax in list(axes.flat)[len(panels):]:
         ax.set_visible(False)
     fig.suptitle(fig_cfg.get("title", ""), fontsize=10)
-    for out in outputs:
-        save_atomic(fig, out)
-    plt.close(fig)
+    save_all(fig, outputs)
 
 
 def plot_design_equations(ds, outputs) -> None:
@@ -104,15 +102,20 @@ def plot_design_equations(ds, outputs) -> None:
         ax.set(xlabel=x, ylabel=y, xlim=(0, 1), ylim=(0, 1.1))
         ax.legend(fontsize=7)
     fig.suptitle("Design equations against direct simulation", fontsize=10)
-    for out in outputs:
-        save_atomic(fig, out)
-    plt.close(fig)
+    save_all(fig, outputs)
 
 
 def save_atomic(fig, path) -> None:
     path = Path(path)
     with atomic_path(path, suffix=path.suffix) as tmp:
         fig.savefig(tmp, dpi=130, metadata={"CreationDate": None} if path.suffix == ".pdf" else None)
+
+
+def save_all(fig, outputs) -> None:
+    """The figure to each of its files (PNG and PDF), then closed."""
+    for out in outputs:
+        save_atomic(fig, out)
+    plt.close(fig)
 
 
 CHART_COLORS = ["#f0f0f0", "#c8c8c8", "#f4a582", "#4393c3"]
@@ -136,9 +139,7 @@ def plot_stability_chart(ds, outputs) -> None:
     handles = [Patch(color=c, label=lab) for c, lab in zip(CHART_COLORS, CHART_LABELS)]
     fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8)
     fig.tight_layout(rect=(0, 0.08, 1, 1))
-    for out in outputs:
-        save_atomic(fig, out)
-    plt.close(fig)
+    save_all(fig, outputs)
 
 
 def plot_branches(ds, outputs) -> None:
@@ -160,9 +161,7 @@ def plot_branches(ds, outputs) -> None:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()
-    for out in outputs:
-        save_atomic(fig, out)
-    plt.close(fig)
+    save_all(fig, outputs)
 
 
 MODE_STYLE = {"from_rest": "-", "continuation_up": "--", "continuation_down": "-."}
@@ -190,9 +189,7 @@ def plot_coexistence(spec: dict, from_rest, continuation: dict, ensemble, output
     ax.grid(alpha=0.3)
     ax.set_title(f"{curve_label(spec)}: sweep protocol and initial condition")
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    for out in outputs:
-        save_atomic(fig, out)
-    plt.close(fig)
+    save_all(fig, outputs)
 
 
 def plot_hysteresis(spec: dict, continuation: dict, from_rest, branches, gap_ratio: float, xst_over_amax: float,
@@ -222,9 +219,7 @@ def plot_hysteresis(spec: dict, continuation: dict, from_rest, branches, gap_rat
     ax.set_title(f"{curve_label(spec)}, g = {gap_ratio:g}: hysteresis of the frequency response")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    for out in outputs:
-        save_atomic(fig, out)
-    plt.close(fig)
+    save_all(fig, outputs)
 
 
 def plot_work_precision(ds, footer: str, outputs, error: str = "amplitude_error") -> None:
@@ -257,9 +252,7 @@ def plot_work_precision(ds, footer: str, outputs, error: str = "amplitude_error"
         ax.set_visible(False)
     fig.text(0.01, 0.005, footer, fontsize=6.5, va="bottom")
     fig.tight_layout(rect=(0, 0.03, 1, 1))
-    for out in outputs:
-        save_atomic(fig, out)
-    plt.close(fig)
+    save_all(fig, outputs)
 
 
 def plot_stability_map(table, outputs) -> None:
@@ -289,9 +282,7 @@ def plot_stability_map(table, outputs) -> None:
                  "orange finished outside that, red failed or non-finite (largest penetration beyond a wall)",
                  fontsize=9)
     fig.tight_layout()
-    for out in outputs:
-        save_atomic(fig, out)
-    plt.close(fig)
+    save_all(fig, outputs)
 
 
 ROBUSTNESS_PANELS = (
@@ -347,9 +338,7 @@ def plot_robustness(designs: dict, outputs) -> None:
     legend_ax.legend(handles=handles, loc="center", fontsize=9, frameon=False, title="design")
     fig.suptitle("Table 1 in numbers: X_m as what the designer does not control changes (stars: design points)",
                  fontsize=10)
-    for out in outputs:
-        save_atomic(fig, out)
-    plt.close(fig)
+    save_all(fig, outputs)
 
 
 def _plot_units(ax, designs: dict, colors) -> None:
@@ -463,9 +452,7 @@ def plot_design_charts(charts: dict, outputs) -> None:
         ax.legend(fontsize=7, ncol=2)
     fig.colorbar(mesh, ax=axes[:-1, :], shrink=0.6, label="X_m = x_max / A_max")
     fig.suptitle(textwrap.fill(f"Design charts for {cid.attrs['design_point']}", 120), fontsize=10)
-    for out in outputs:
-        save_atomic(fig, out)
-    plt.close(fig)
+    save_all(fig, outputs)
 
 
 LOAD_COLUMNS = (("records", None, "the four records (mean)"), ("kanai_tajimi", "firm", "Kanai-Tajimi, firm (mean)"),
@@ -506,9 +493,7 @@ def plot_loads_reduction(datasets: dict, outputs) -> None:
     fig.suptitle("Peak roof displacement with each damper over the bare building's (below 1: it helps; "
                  "solid: the larger mass ratio)", fontsize=10)
     fig.supylabel("peak roof displacement / the bare building's (each row: one building)", fontsize=9)
-    for out in outputs:
-        save_atomic(fig, out)
-    plt.close(fig)
+    save_all(fig, outputs)
 
 
 def plot_time_history(ds, outputs) -> None:
@@ -535,6 +520,4 @@ def plot_time_history(ds, outputs) -> None:
     bottom.set_xlabel("time (s)" if unit == "m" else "time (model units: radians of the structure)")
     bottom.legend(fontsize=8)
     fig.suptitle(ds.attrs["title"], fontsize=9)
-    for out in outputs:
-        save_atomic(fig, out)
-    plt.close(fig)
+    save_all(fig, outputs)

@@ -100,6 +100,15 @@ def design_peak(bare: xr.Dataset, design_sa_g: float) -> float:
     return float(bare["peak_roof"].sel(level=design_sa_g).median())
 
 
+def designed_damper(loads: dict, building: Building, kind: str, mass_ratio: float, gap_ratios: dict[float, float],
+                    peak: float):
+    """The earthquake study's design of one damper: a TMD Den Hartog-tuned to the first mode; an impact damper with
+    the clearance its design gap ratio times the bare building's median peak roof displacement at the design level."""
+    if kind == "tmd":
+        return tmd_damper(building, mass_ratio)
+    return impact_damper(kind, building, mass_ratio, gap_ratios[mass_ratio] * peak, loads["e"])
+
+
 def damper_runs(cfg: dict, loads: dict, building_name: str, kind: str, bare: xr.Dataset,
                 gap_ratios: dict[float, float]) -> xr.Dataset:
     """One damper type on one building, at each mass ratio, under every ground motion over the ladder.
@@ -111,8 +120,7 @@ def damper_runs(cfg: dict, loads: dict, building_name: str, kind: str, bare: xr.
     peak = design_peak(bare, cfg["design_sa_g"])
     parts = []
     for mr in loads["mass_ratios"]:
-        damper = (tmd_damper(building, mr) if kind == "tmd"
-                  else impact_damper(kind, building, mr, gap_ratios[mr] * peak, loads["e"]))
+        damper = designed_damper(loads, building, kind, mr, gap_ratios, peak)
         columns = [over_ladder(lambda level, key=key: measure(building, (damper,),
                                                                scaled_motion(records[key], sa[key], level),
                                                                cfg["storey_height_m"]), levels,

@@ -10,7 +10,7 @@ import xarray as xr
 from scipy import optimize, stats
 
 from impact.model.scene import DAMPER_KINDS
-from impact.model.suites import GROUPS
+from impact.model.suites import GROUPS, record_of
 
 #: the bare building's measures kept beside the damped ones in the collected dataset
 BARE_KEPT = ("drift_ratio", "peak_roof", "peak_accel", "energy_residual")
@@ -50,11 +50,6 @@ def collect(bare: dict, dampers: dict) -> xr.Dataset:
     return ds
 
 
-def _record_of(motion: str) -> str:
-    """The record a ground motion is a component of (suite and record id)."""
-    return motion.rsplit(":", 1)[0]
-
-
 def bootstrap_median(values: np.ndarray, clusters: np.ndarray, samples: int, seed: int,
                      interval: float) -> tuple[float, float]:
     """The percentile interval of the median, resampling whole clusters (records) with replacement."""
@@ -73,7 +68,7 @@ def verdicts(ds: xr.Dataset, cfg: dict, level: float) -> pd.DataFrame:
     v = cfg["verdict"]
     ratio = ds["drift_over_bare"].sel(level=level)
     groups = ds["group"].values
-    records = np.array([_record_of(m) for m in ds["motion"].values])
+    records = np.array([record_of(m) for m in ds["motion"].values])
     rows = []
     for b in ds["building"].values:
         for kind in ds["damper"].values:

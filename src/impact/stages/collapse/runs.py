@@ -1,0 +1,248 @@
+"""The collapse assessment's runs on the exact engine: per archetype and case, every ground motion traced to collapse
+by hunt and fill (Vamvatsikos & Cornell 2004)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import xarray as xr
+
+from impact.engine.scenes import simulate_scene
+from impact.model.building import Building
+from impact.model.params import G_GRAV
+from impact.model.records import Record
+from impact.model.scene import GroundMotion, Scene
+from impact.model.suites import load_suite_record
+from impact.outputs.files import as_integers, flag
+from impact.outputs.labels import EVENT_CAP_MEANINGS
+from impact.stages.collapse.p695 import archetype_numbers
+from impact.stages.collapse.plan import archetype, code_period, hunt_levels, stability_coefficients, stability_limit
+from impact.stages.ida.runs import design_peak, designed_damper
+
+INITIAL_CONDITION = ("building at rest with no plastic drift; an impact damper's mass centred between its walls; "
+                     "every run of a ground motion starts so")
+
+#: what each run keeps: name -> (long name, units; None: a flag)
+RUN_MEASURES = {
+    "run_sa": ("Sa(T1, 5 %) the ground motion is scaled to in this run, over standard gravity (Sa in g)", "1"),
+    "run_drift_ratio": ("peak inter-storey drift ratio of the run (up to the collapse, if it collapsed)", "1"),
+    "run_collapsed": ("whether a storey's drift reached the collapse limit", None),
+    "run_energy_residual": ("energy balance residual of the run, relative", "1"),
+    "run_event_cap_reached": ("whether the run stopped at the event cap or the stall guard", None),
+    "run_impacts": ("impacts of the damper's units in the run", "1"),
+}
+FLAGS = {"run_collapsed": ("stood", "collapsed"), "run_event_cap_reached": EVENT_CAP_MEANINGS}
+WHOLE = ("run_collapsed", "run_event_cap_reached", "run_impacts", "runs", "unresolved")
+
+
+@dataclass
+class Trace:
+    """One ground motion's runs in the order they ran, and the bracket the collapse intensity lies in (g):
+    `standing` the highest Sa below the collapse that stood, `collapse` the lowest that collapsed (None: none up
+    to the hunt's last level, or none before the trace stopped).  `unresolved`: a run stopped at the event cap or
+    the stall guard, and the trace with it, the bracket as it stood then."""
+
+    runs: list = field(default_factory=list)
+    standing: float = 0.0
+    collapse: float | None = None
+    unresolved: bool = False
+
+
+class _Unresolved(Exception):
+    """A run stopped at the event cap or the stall guard: it says neither that the building stood nor that it fell."""
+
+
+def with_free_vibration(record: Record, sa_record_g: float, level_g: float, free_s: float) -> GroundMotion:
+    """The record scaled so that its Sa(T1) is level_g, then `free_s` seconds of still ground: a drift running
+    away when the shaking stops still reaches its limit."""
+    tail = np.zeros(int(round(free_s / record.dt)))
+    accel = np.concatenate([record.accel_g * (G_GRAV * level_g / sa_record_g), tail])
+    return GroundMotion(accel, record.dt, record.name)
+
+
+def collapse_run(building: Building, dampers: tuple, motion: GroundMotion, drift_limit: float | None) -> dict:
+    """One run to the end of the motion or to collapse: its measures."""
+    res = simulate_scene(Scene(building, dampers, motion, collapse_drift_ratio=drift_limit))
+    heights = building.storey_height
+    collapsed = res.storeys is not None and res.storeys.collapsed
+    return {"run_drift_ratio": float(np.max(res.peak_drifts / heights)), "run_collapsed": int(collapsed),
+            "run_energy_residual": res.diagnostics["energy_residual"],
+            "run_event_cap_reached": int(bool(res.diagnostics["event_cap_reached"])), "run_impacts": res.impacts}
+
+
+def trace(run_at, cfg: dict) -> Trace:
+    """Hunt: the hunt's levels up to the first collapse (halving down from the first level if it collapses).
+    Bisect the bracket until it is narrower than `resolution` of its top.  Fill: the widest gaps below the bracket
+    get a run each, `fill` times, so the drift curve is drawn where it climbs; a fill run that collapses (a curve
+    that resurrects above it) becomes the collapse, and its bracket is bisected in turn.  A run that stops at the
+    event cap ends the trace, flagged."""
+    out = Trace()
+
+    def collapses(level: float) -> bool:
+        out.runs.append({"run_sa": level, **run_at(level)})
+        if out.runs[-1]["run_event_cap_reached"]:
+            raise _Unresolved
+        return bool(out.runs[-1]["run_collapsed"])
+
+    try:
+        _hunt_fill(out, collapses, cfg)
+    except _Unresolved:
+        out.unresolved = True
+    return out
+
+
+def _hunt_fill(out: Trace, collapses, cfg: dict) -> None:
+    for level in hunt_levels(cfg["hunt"]):
+        if collapses(level):
+            out.collapse = level
+            break
+        out.standing = level
+    if out.collapse is None:
+        return
+    if out.standing == 0.0 and not _hunt_down(out, collapses):
+        return
+    _narrow(out, collapses, cfg["resolution"])
+    for _ in range(cfg["fill"]):
+        _fill_widest_gap(out, collapses, cfg["resolution"])
+
+
+#: halvings below the first hunt level before a motion is said to collapse below what the study resolves
+HALVINGS = 6
+
+
+def _hunt_down(out: Trace, collapses) -> bool:
+    """Halve the level until a run stands; False if none does within HALVINGS (the bracket is then [0, lowest])."""
+    for _ in range(HALVINGS):
+        level = 0.5 * out.collapse
+        if not collapses(level):
+            out.standing = level
+            return True
+        out.collapse = level
+    return False
+
+
+#: bisections at most: a bracket from 0 (no level below the collapse stood) narrows as a halving does, so this bounds
+#: the trace where it would chase a collapse towards zero; from any bracket the hunt leaves, ~10 suffice
+BISECTIONS = 40
+
+
+def _narrow(out: Trace, collapses, resolution: float) -> None:
+    for _ in range(BISECTIONS):
+        if out.collapse - out.standing <= resolution * out.collapse:
+            return
+        middle = 0.5 * (out.standing + out.collapse)
+        if collapses(middle):
+            out.collapse = middle
+        else:
+            out.standing = middle
+
+
+def _fill_widest_gap(out: Trace, collapses, resolution: float) -> None:
+    below = sorted({0.0, *(r["run_sa"] for r in out.runs if r["run_sa"] <= out.standing)})
+    gaps = np.diff(below)
+    widest = int(np.argmax(gaps))
+    if not collapses(0.5 * (below[widest] + below[widest + 1])):
+        return
+    out.collapse = out.runs[-1]["run_sa"]
+    out.standing = max((r["run_sa"] for r in out.runs if r["run_sa"] < out.collapse and not r["run_collapsed"]),
+                       default=0.0)
+    _narrow(out, collapses, resolution)
+
+
+def _traces_dataset(traces: list[Trace], keys: list[str]) -> xr.Dataset:
+    """Per ground motion: its runs sorted by level (padded with NaN to the most any motion took) and its bracket."""
+    width = max(len(t.runs) for t in traces)
+    data = {}
+    for name in RUN_MEASURES:
+        table = np.full((len(traces), width), np.nan)
+        for i, t in enumerate(traces):
+            ordered = sorted(t.runs, key=lambda r: r["run_sa"])
+            table[i, :len(ordered)] = [r[name] for r in ordered]
+        data[name] = (("motion", "run"), table)
+    data["collapse_sa"] = ("motion", np.array([np.nan if t.collapse is None else t.collapse for t in traces]))
+    data["standing_sa"] = ("motion", np.array([t.standing for t in traces]))
+    data["runs"] = ("motion", np.array([len(t.runs) for t in traces]))
+    data["unresolved"] = ("motion", np.array([int(t.unresolved) for t in traces]))
+    return xr.Dataset(data, coords={"motion": keys, "run": np.arange(width)})
+
+
+def _motions(ida_bare: xr.Dataset) -> tuple[list[str], dict[str, Record], dict[str, float]]:
+    keys = ida_bare["motion"].values.tolist()
+    return keys, {k: load_suite_record(k) for k in keys}, dict(zip(keys, ida_bare["sa_record"].values.tolist()))
+
+
+def traced(cfg: dict, building: Building, dampers: tuple, ida_bare: xr.Dataset) -> xr.Dataset:
+    """Every ground motion of the linear IDA's set traced to collapse on one archetype with its dampers."""
+    keys, records, sa = _motions(ida_bare)
+    traces = [trace(lambda level, key=key: collapse_run(
+        building, dampers, with_free_vibration(records[key], sa[key], level, cfg["free_vibration_s"]),
+        cfg["drift_limit"]), cfg) for key in keys]
+    return _traces_dataset(traces, keys).assign_coords(group=ida_bare["group"])
+
+
+def _pushover_dataset(numbers: dict, building: Building, theta_max: float) -> xr.Dataset:
+    curve = numbers["curve"]
+    ds = xr.Dataset({
+        "pushover_roof_drift": ("corner", curve.roof_drift,
+                                {"long_name": "pushover: roof drift relative to the ground", "units": "m"}),
+        "pushover_base_shear": ("corner", curve.base_shear / (building.total_mass * G_GRAV),
+                                {"long_name": "pushover: base shear over the building's weight", "units": "1"}),
+        "yield_drift": ("storey", building.yield_drift,
+                        {"long_name": "storey drift at first yield (design strength over elastic stiffness)",
+                         "units": "m"}),
+        "storey_strength": ("storey", building.yield_drift * building.storey_stiffness,
+                            {"long_name": "storey shear strength by the design rule", "units": "N"}),
+        "stability_coefficient": ("storey", stability_coefficients(building),
+                                  {"long_name": "P-delta stability coefficient theta: weight carried over elastic "
+                                                "stiffness times storey height", "units": "1"}),
+    }, coords={"storey": np.arange(1, building.storeys + 1)})
+    ds["storey"].attrs = {"long_name": "storey, from the ground up", "units": "1"}
+    ds.attrs.update({key: numbers[key] for key in ("period_s", "code_period_s", "period_p_delta_s", "v_max_over_w",
+                                                   "c0", "yield_roof_drift_m", "ultimate_roof_drift_m", "ultimate_by",
+                                                   "mu_T", "S_MT_g")},
+                    pushover_ended=curve.ended, stability_limit=theta_max)
+    return ds
+
+
+def _described(ds: xr.Dataset, cfg: dict, building_name: str, building: Building, case: str) -> xr.Dataset:
+    for name, (text, units) in RUN_MEASURES.items():
+        ds[name].attrs = flag(text, *FLAGS[name]) if units is None else {"long_name": text, "units": units}
+    ds["collapse_sa"].attrs = {"long_name": "collapse intensity: the lowest Sa(T1, 5 %) found to collapse, over "
+                                            "standard gravity (NaN: none up to the hunt's last level)", "units": "1"}
+    ds["standing_sa"].attrs = {"long_name": "the highest Sa(T1, 5 %) below the collapse intensity found to stand, "
+                                            "over standard gravity", "units": "1"}
+    ds["runs"].attrs = {"long_name": "runs the ground motion took", "units": "1"}
+    ds["unresolved"].attrs = flag("whether a run of the ground motion stopped at the event cap or the stall guard, "
+                                  "ending its trace (censored at standing_sa)", "resolved", "unresolved")
+    ds = as_integers(ds, WHOLE, missing=-1)
+    ds["motion"].attrs = {"long_name": "FEMA P695 ground motion (suite:record:component)"}
+    ds["group"].attrs = {"long_name": "record group (far-field, near-field pulse, near-field no pulse)"}
+    ds["run"].attrs = {"long_name": "run of a ground motion, by its level (lowest first)", "units": "1"}
+    ds.attrs.update(title=f"Collapse assessment: archetype {building_name}, {case}", building=building_name,
+                    damper=case, storeys=building.storeys, period1_s=building.period1, zeta=building.zeta,
+                    hardening=building.hardening, drift_limit=cfg["drift_limit"], resolution=cfg["resolution"],
+                    free_vibration_s=cfg["free_vibration_s"], initial_condition=INITIAL_CONDITION)
+    return ds
+
+
+def bare_collapse(cfg: dict, ida: dict, loads: dict, building_name: str, ida_bare: xr.Dataset) -> xr.Dataset:
+    """The bare archetype: its design, its pushover and P695's numbers from it, every motion traced to collapse."""
+    building = archetype(cfg, ida, loads, building_name)
+    numbers = archetype_numbers(building, cfg, code_period(cfg, building.storey_height))
+    ds = xr.merge([traced(cfg, building, (), ida_bare), _pushover_dataset(numbers, building, stability_limit(cfg))],
+                  combine_attrs="no_conflicts")
+    return _described(ds, cfg, building_name, building, "bare")
+
+
+def damper_collapse(cfg: dict, ida: dict, loads: dict, building_name: str, kind: str, ida_bare: xr.Dataset,
+                    gap_ratios: dict[float, float]) -> xr.Dataset:
+    """One damper type at each mass ratio, as the linear IDA designs it, on the archetype, traced to collapse."""
+    building = archetype(cfg, ida, loads, building_name)
+    peak = design_peak(ida_bare, ida["design_sa_g"])
+    parts = [traced(cfg, building, (designed_damper(loads, building, kind, mr, gap_ratios, peak),), ida_bare)
+             for mr in loads["mass_ratios"]]
+    ds = xr.concat(parts, dim="mass_ratio", join="outer", coords="minimal",
+                   compat="override").assign_coords(mass_ratio=list(loads["mass_ratios"]))
+    ds["mass_ratio"].attrs = {"long_name": "damper mass over the building's total mass", "units": "1"}
+    return _described(ds, cfg, building_name, building, kind)
