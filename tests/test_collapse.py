@@ -173,9 +173,9 @@ def test_hunt_and_fill_brackets_the_threshold_to_the_resolution(at):
 def test_a_motion_that_stands_at_the_hunts_top_never_collapses_and_is_censored():
     out = CR.trace(_threshold(math.inf), COLLAPSE)
     assert out.collapse is None and out.standing == COLLAPSE["hunt"]["max_sa_g"] and not out.unresolved
-    assert CT.counted_median(np.array([np.nan, np.nan, 1.0])) == math.inf
-    assert CT.counted_median(np.array([np.nan, 2.0, 1.0])) == 2.0
-    assert CT.counted_median(np.array([3.0, 2.0, 1.0, 4.0])) == 2.0  # half collapsed at 2
+    assert P.counted_median(np.array([np.nan, np.nan, 1.0])) == math.inf
+    assert P.counted_median(np.array([np.nan, 2.0, 1.0])) == 2.0
+    assert P.counted_median(np.array([3.0, 2.0, 1.0, 4.0])) == 2.0  # half collapsed at 2
 
 
 def test_a_motion_that_collapses_at_every_level_is_bracketed_from_zero_within_six_halvings():

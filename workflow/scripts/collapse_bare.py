@@ -4,8 +4,8 @@ import xarray as xr
 
 from impact.outputs.files import write_dataset
 from impact.outputs.job_log import job_config, log_versions, logged
+from impact.stages.collapse.p695 import counted_median
 from impact.stages.collapse.runs import bare_collapse
-from impact.stages.collapse.tables import counted_median
 
 with logged(snakemake.log[0]) as log:
     log_versions()

@@ -94,6 +94,13 @@ def collapse_probability(acmr: float, beta_tot: float) -> float:
     return 0.0 if math.isinf(acmr) else float(norm.cdf(-math.log(acmr) / beta_tot))
 
 
+def counted_median(collapse_sa: np.ndarray) -> float:
+    """The lowest intensity at which half the motions have collapsed; a motion without a collapse (standing at the
+    hunt's top, or unresolved) counts as collapsing above every level, so the median is inf when half or more
+    have none."""
+    return float(np.quantile(np.where(np.isnan(collapse_sa), np.inf, collapse_sa), 0.5, method="inverted_cdf"))
+
+
 def spectral_shape_factor(period: float, mu_t: float, sdc: str, group: str) -> float:
     return float(ssf(period, mu_t, sdc, SSF_SETS[group]))
 

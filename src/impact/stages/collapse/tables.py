@@ -14,6 +14,7 @@ from impact.model.suites import GROUPS, record_of
 from impact.stages.collapse.p695 import (
     acceptable_acmr,
     collapse_probability,
+    counted_median,
     spectral_shape_factor,
     total_uncertainty,
 )
@@ -31,13 +32,6 @@ def cases(bare: xr.Dataset, dampers: dict[str, xr.Dataset]):
     for kind, ds in dampers.items():
         for mr in ds["mass_ratio"].values:
             yield kind, float(mr), ds.sel(mass_ratio=mr)
-
-
-def counted_median(collapse_sa: np.ndarray) -> float:
-    """The lowest intensity at which half the motions have collapsed; a motion without a collapse (standing at the
-    hunt's top, or unresolved) counts as collapsing above every level, so the median is inf when half or more
-    have none."""
-    return float(np.quantile(np.where(np.isnan(collapse_sa), np.inf, collapse_sa), 0.5, method="inverted_cdf"))
 
 
 def lognormal_fit(runs: xr.Dataset) -> tuple[float, float]:
