@@ -8,7 +8,7 @@ import math
 import numpy as np
 import xarray as xr
 
-from impact.engine.scenes import simulate_scene
+from impact.engine.run import simulate
 from impact.engine.spectra import spectral_acceleration
 from impact.model.building import Building
 from impact.model.params import G_GRAV
@@ -30,7 +30,7 @@ def scaled_motion(record: Record, sa_record_g: float, level_g: float) -> GroundM
 
 def measure(building: Building, dampers: tuple, load: GroundMotion, storey_height: float) -> dict:
     """The measures of one run (SI units), over the record's length."""
-    res = simulate_scene(Scene(building, dampers, load))
+    res = simulate(Scene(building, dampers, load), measures=("impacts", "peaks"))
     return {"drift_ratio": res.peak_interstorey_drift / storey_height, "peak_roof": res.peak_roof_displacement,
             "peak_accel": res.peak_roof_acceleration,
             "stroke": float(np.max(res.peak_strokes)) if len(res.peak_strokes) else math.nan,

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import xarray as xr
 
-from impact.engine.scenes import simulate_scene
+from impact.engine.run import simulate
 from impact.model.building import Building
 from impact.model.scene import Damper, GroundMotion, Scene
 from impact.model.suites import record_by_key
@@ -34,8 +34,9 @@ from impact.stages.loads.tables import (
 
 def run(building: Building, dampers: tuple, load: Load) -> dict:
     """The measures of one scene run (SI units)."""
-    res = simulate_scene(Scene(building, dampers, load.load, duration=load.duration),
-                         record=IMPACT_RECORDS if dampers and dampers[0].has_walls else 0)
+    res = simulate(Scene(building, dampers, load.load, duration=load.duration),
+                   measures=("amplitude", "impacts", "peaks", "records"),
+                   record=IMPACT_RECORDS if dampers and dampers[0].has_walls else 0)
     out = {key: getattr(res, attr) for key, attr in RESPONSES.items()}
     out["stroke"] = float(np.max(res.peak_strokes)) if len(res.peak_strokes) else math.nan
     out["impacts"] = res.impacts
@@ -137,8 +138,9 @@ def time_history(cfg: dict, building_name: str, record: str, kind: str, mass_rat
     damper = _impact(cfg, kind, building, mass_ratio, gap_ratio, bare, load)
     times = np.arange(0.0, load.load.duration, building.period1 / samples_per_period)
     roof = building.storeys - 1
-    plain = simulate_scene(Scene(building, (), load.load), times=times)
-    damped = simulate_scene(Scene(building, (damper,), load.load), times=times, record=IMPACT_RECORDS)
+    plain = simulate(Scene(building, (), load.load), measures=("peaks", "samples"), times=times)
+    damped = simulate(Scene(building, (damper,), load.load), measures=("peaks", "records", "samples"), times=times,
+                      record=IMPACT_RECORDS)
     q = damped.samples["q"]
     title = (f"Loads study: one case in time ({label(building_name)}, {record} at {pga:g} g, "
              f"{kind.upper()} of {mass_ratio:g} of the mass, clearance {gap_ratio:g} x the bare peak roof displacement)")
