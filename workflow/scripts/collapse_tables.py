@@ -22,7 +22,7 @@ with logged(snakemake.log[0]) as log:
     log.info("%s", table.to_string())
     write_csv_atomic(snakemake.output.margins, table)
     write_csv_atomic(snakemake.output.verdicts, verdict)
-    top, groups = best(verdict, study["resolution"]), performance_groups(table)
+    top, groups = best(verdict, study["resolution"]), performance_groups(table, study["resolution"])
     write_csv_atomic(snakemake.output.best, top)
     write_csv_atomic(snakemake.output.groups, groups)
     write_text_atomic(snakemake.output.summary, summary(table, verdict, top, groups))
