@@ -124,7 +124,11 @@ def smoke_digest(results) -> dict:
     Haswell, SkylakeX, Sandybridge and generic kernels, and numpy's loops at AVX-512), the rounding other
     machines do; see `within_round_off`.  The study computes with one set (impact.kernels), which every
     x86-64 CPU with AVX2 runs alike.  Extended, not regenerated, for the collapse stage (issue 44): its 98 entries
-    added with their spreads over the five kernel sets, every one of the 912 before them identical to the bit.
+    added with their spreads over the five kernel sets, every one of the 912 before them identical to the bit.  Its
+    tables' columns were then reworked (ties within the hunt's resolution, a clear flag per verdict): the seven new
+    columns of collapse_{best,groups,margins,verdicts}.csv are functions of each motion's collapse bracket and flags,
+    whose spread over the five kernel sets was 0, so theirs is 0; the other 1,009 entries stayed identical to the
+    bit, through the stages' move to run.simulate as well.
     Regenerate it only for a change meant to move
     numbers, or a new constraints.txt: python tools/roundoff_ensemble.py --write
     """
