@@ -15,8 +15,8 @@ from impact.stages.loads.plan import make_building
 #: the cases of one archetype: the bare building, then each damper type
 CASES = ("bare", *DAMPER_KINDS)
 #: what the stage reads from the linear IDA's and the earthquake study's sections: its buildings, record set and
-#: damper designs are theirs
-IDA_KEYS = ("suites", "motions", "design_sa_g", "storey_height_m")
+#: damper designs are theirs (the IDA's ground motions reach it through the IDA's bare runs, its input)
+IDA_KEYS = ("design_sa_g", "storey_height_m")
 LOADS_KEYS = ("storeys", "periods_s", "zeta", "mass_ratios", "e")
 
 

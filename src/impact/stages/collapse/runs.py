@@ -18,7 +18,7 @@ from impact.outputs.files import as_integers, flag
 from impact.outputs.labels import EVENT_CAP_MEANINGS
 from impact.stages.collapse.p695 import archetype_numbers
 from impact.stages.collapse.plan import archetype, code_period, hunt_levels, stability_coefficients, stability_limit
-from impact.stages.ida.runs import design_peak, designed_damper
+from impact.stages.ida.runs import design_peak, designed_damper, scaled_motion
 
 INITIAL_CONDITION = ("building at rest with no plastic drift; an impact damper's mass centred between its walls; "
                      "every run of a ground motion starts so")
@@ -56,9 +56,9 @@ class _Unresolved(Exception):
 def with_free_vibration(record: Record, sa_record_g: float, level_g: float, free_s: float) -> GroundMotion:
     """The record scaled so that its Sa(T1) is level_g, then `free_s` seconds of still ground: a drift running
     away when the shaking stops still reaches its limit."""
+    motion = scaled_motion(record, sa_record_g, level_g)
     tail = np.zeros(int(round(free_s / record.dt)))
-    accel = np.concatenate([record.accel_g * (G_GRAV * level_g / sa_record_g), tail])
-    return GroundMotion(accel, record.dt, record.name)
+    return GroundMotion(np.concatenate([motion.accel, tail]), motion.dt, motion.name)
 
 
 def collapse_run(building: Building, dampers: tuple, motion: GroundMotion, drift_limit: float | None) -> dict:
