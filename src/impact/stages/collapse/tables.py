@@ -18,6 +18,7 @@ from impact.stages.collapse.p695 import (
     spectral_shape_factor,
     total_uncertainty,
 )
+from impact.stages.resampling import cluster_draws
 
 #: conditional collapse probabilities at MCE P695 judges a margin against: a performance group's mean (10 %), one
 #: archetype (20 %)
@@ -120,11 +121,7 @@ def _paired_interval(statistic, records: np.ndarray, samples: int, seed: int,
     """The percentile interval of a statistic of the motions, resampling whole records (both components together,
     as they are not independent) with replacement, and the share of draws left out for having no answer (NaN: a
     resample whose bare median is above the hunt's top).  Draws may be inf (a damped median above the top)."""
-    ids = np.unique(records)
-    members = [np.flatnonzero(records == r) for r in ids]
-    rng = np.random.default_rng(seed)
-    draws = np.array([statistic(np.concatenate([members[i] for i in rng.integers(0, len(ids), len(ids))]))
-                      for _ in range(samples)])
+    draws = cluster_draws(statistic, records, samples, seed)
     read = draws[~np.isnan(draws)]
     unread = 1.0 - len(read) / len(draws)
     if not len(read):

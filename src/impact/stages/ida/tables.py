@@ -11,6 +11,7 @@ from scipy import optimize, stats
 
 from impact.model.scene import DAMPER_KINDS
 from impact.model.suites import GROUPS, record_of
+from impact.stages.resampling import cluster_draws
 
 #: the bare building's measures kept beside the damped ones in the collected dataset
 BARE_KEPT = ("drift_ratio", "peak_roof", "peak_accel", "energy_residual")
@@ -53,11 +54,7 @@ def collect(bare: dict, dampers: dict) -> xr.Dataset:
 def bootstrap_median(values: np.ndarray, clusters: np.ndarray, samples: int, seed: int,
                      interval: float) -> tuple[float, float]:
     """The percentile interval of the median, resampling whole clusters (records) with replacement."""
-    ids = np.unique(clusters)
-    members = [values[clusters == c] for c in ids]
-    rng = np.random.default_rng(seed)
-    medians = np.array([np.median(np.concatenate([members[i] for i in rng.integers(0, len(ids), len(ids))]))
-                        for _ in range(samples)])
+    medians = cluster_draws(lambda idx: np.median(values[idx]), clusters, samples, seed)
     tail = 0.5 * (1.0 - interval)
     return float(np.quantile(medians, tail)), float(np.quantile(medians, 1.0 - tail))
 
