@@ -128,6 +128,22 @@ def draw_yielding_scene(rng, seconds: float = 3.0, reach: dict = REACH) -> tuple
     return replace(scene, building=building, collapse_drift_ratio=collapse), scale
 
 
+YIELDING_SHARE = 0.25  # of the probe at scale's scenes, on buildings that yield (tools/probe_scenes.py --yielding)
+
+
+def is_yielding(seed: int, index: int, share: float = YIELDING_SHARE) -> bool:
+    """Whether the probe at scale's scene `index` of `seed` is on a building that yields."""
+    return bool(np.random.default_rng([seed, index, 2]).random() < share)
+
+
+def scene_of(seed: int, index: int, share: float = YIELDING_SHARE) -> tuple[Scene, float]:
+    """The probe at scale's scene `index` of `seed` (its reproducer): a seed's elastic scenes are the ones it
+    drew before yielding buildings existed."""
+    if is_yielding(seed, index, share):
+        return draw_yielding_scene(np.random.default_rng([seed, index, 1]), reach=WIDE)
+    return draw_scene(np.random.default_rng([seed, index]), reach=WIDE)
+
+
 def _sampled_peaks(scene: Scene, q: np.ndarray) -> np.ndarray:
     """The monitors' displacement rows (roof, drifts, first unit of each damper's stroke) over samples."""
     nf = scene.building.storeys

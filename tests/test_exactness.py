@@ -434,20 +434,35 @@ def test_identical_units_that_start_apart_and_fall_into_step_end_as_one_unit_of_
 
 
 #: scenes the probe at scale found breaking a promise (tools/probe_scenes.py, 3,000 scenes of up to 10 storeys,
-#: 4 dampers and 12 units), by (seed, index), each with the promise it broke: issue 42's open classes.
-#: Seed 3761029462 (2026-11-26): scenes 2135 and 1232, a unit passes its wall by 5.9e-7 and 1.1e-7 of the
-#: motion's scale, and in 1232 a dense sample of the roof lies 1.3e-7 above its certified peak; scene 2512, the
-#: energy balances to 1.7e-9 only.  Scene 2135 breaks only under the study's pinned kernel set (impact.kernels,
-#: as the suite runs): with numpy's default kernels the same scene keeps every promise, so it sits at round-off.
-#: Seed 2870437391 (2026-11-27): scene 1235, six storeys under a harmonic force, elastic pendulums in a 1.1e-6 m
-#: gap, nine plastic CID units with friction and a CID of e = 0.17 on floor 2: a unit 7.7e-5 m (1e-3 of the
-#: scale) through its wall, after one grazing event.  Strict: the day a promise holds, its test fails, and the
-#: scene moves to the tests that hold.  (Scenes that ran past 60 s are too slow for the suite: the tool
-#: reproduces them.)
+#: 4 dampers and 12 units, a quarter of them yielding), by (seed, index) (probe.scene_of draws them), each with
+#: the promise it broke and now keeps, and why it broke.
 AT_SCALE_SEED = 3761029462
-OPEN_AT_SCALE = {(AT_SCALE_SEED, 2135): "penetration", (AT_SCALE_SEED, 1232): "sample above a certified peak",
-                 (AT_SCALE_SEED, 2512): "energy residual", (2870437391, 1235): "penetration",
-                 (1500758912, 751): "penetration"}
+HELD_AT_SCALE = {
+    # a unit released from its wall at zero relative speed came back through it before the escape's first look
+    # (the time to cross the gap), which found it 9.5e-10 m beyond the wall with no clear time to refine from
+    # and took that as the touch: the look is now shortened until the return is bracketed
+    (2067450001, 870): "penetration", (1500758912, 751): "penetration", (2870437391, 1235): "penetration",
+    (AT_SCALE_SEED, 2135): "penetration", (AT_SCALE_SEED, 1232): "sample above a certified peak",
+    # a sliding unit's friction was turned by a floor's jolt before the other units on that floor had merged
+    # with it, and those merges reversed the slip: the slide's stop was found at once and its speed
+    # (2.4e-7 m/s of 12 units) dropped unaccounted.  Every jolt now applies before any slide is turned
+    (2067450001, 268): "energy residual", (2067450001, 671): "energy residual",
+    (2067450001, 2926): "energy residual",
+}
+#: ... and those that still break it: issue 42's open classes.  3761029462-2512: a pendulum tuned 400 times
+#: above the building in a 2e-5 m gap, no impact, the energy to 1.7e-9 (the modal tables' round-off beside a
+#: stiff mode).  2067450001-184 and -2583: buildings that yield (a bare 7-storey one; a 2-storey one with three
+#: TMDs and a pendulum), the energy drifting to 8e-9 and 1.6e-8 over the yielding branches, and in 2583 a dense
+#: sample of a peak 1.5e-9 above it.  2067450001-2765: eight storeys, a CID and a TMD under a ground motion, no
+#: impact, one segment's peak search gives up.  Strict: the day a promise holds, its test fails, and the scene
+#: moves above.  (Scenes that ran past 60 s or to the event cap, as 2067450001-2283 does, are too slow for the
+#: suite: the tool reproduces them.)
+OPEN_AT_SCALE = {(AT_SCALE_SEED, 2512): "energy residual", (2067450001, 184): "energy residual",
+                 (2067450001, 2583): "energy residual", (2067450001, 2765): "uncertified peak"}
+
+
+def _at_scale_ids(scenes):
+    return [f"{seed}-{index}" for seed, index in sorted(scenes)]
 
 
 def test_units_started_on_their_walls_beside_a_sliding_unit_leave_them_and_the_run_goes_on():
@@ -455,20 +470,24 @@ def test_units_started_on_their_walls_beside_a_sliding_unit_leave_them_and_the_r
     events at t = 0 stopped the run (the stall guard).  With every stride of an escape certified (the fix of
     test_units_released_from_their_wall_do_not_pass_through_it) it makes 3 grazing events and 112 impacts, and
     keeps every promise of the probe."""
-    from probe import WIDE, draw_scene
+    from probe import scene_of
 
-    scene, scale = draw_scene(np.random.default_rng([AT_SCALE_SEED, 650]), reach=WIDE)
-    assert _probe_violations(scene, scale) == []
+    assert _probe_violations(*scene_of(AT_SCALE_SEED, 650)) == []
+
+
+@pytest.mark.parametrize("seed_index, promise", sorted(HELD_AT_SCALE.items()), ids=_at_scale_ids(HELD_AT_SCALE))
+def test_a_scene_the_probe_at_scale_found_keeps_every_promise(seed_index, promise):
+    from probe import scene_of
+
+    assert _probe_violations(*scene_of(*seed_index)) == []
 
 
 @pytest.mark.xfail(strict=True, raises=AssertionError, reason="issue 42: a break the probe at scale found, open")
-@pytest.mark.parametrize("seed_index, promise", sorted(OPEN_AT_SCALE.items()),
-                         ids=[f"{seed}-{index}" for seed, index in sorted(OPEN_AT_SCALE)])
+@pytest.mark.parametrize("seed_index, promise", sorted(OPEN_AT_SCALE.items()), ids=_at_scale_ids(OPEN_AT_SCALE))
 def test_a_scene_the_probe_at_scale_found_keeps_its_promise(seed_index, promise):
-    from probe import WIDE, draw_scene
+    from probe import scene_of
 
-    scene, scale = draw_scene(np.random.default_rng(list(seed_index)), reach=WIDE)
-    broken = [v for v in _probe_violations(scene, scale) if v.startswith(promise)]
+    broken = [v for v in _probe_violations(*scene_of(*seed_index)) if v.startswith(promise)]
     assert broken == []
 
 

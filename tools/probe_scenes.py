@@ -42,22 +42,10 @@ import numpy as np  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from probe import SAMPLES, WIDE, draw_scene, draw_yielding_scene, violations  # noqa: E402 (the path above first)
+from probe import SAMPLES, YIELDING_SHARE, is_yielding, scene_of, violations  # noqa: E402 (the path above first)
 
 from impact.engine.run import simulate  # noqa: E402
 from impact.engine.scenes import compile_scene_loops  # noqa: E402
-
-YIELDING_SHARE = 0.25  # of the scenes, on buildings that yield (--yielding)
-
-
-def is_yielding(seed: int, index: int, share: float) -> bool:
-    return bool(np.random.default_rng([seed, index, 2]).random() < share)
-
-
-def scene_of(seed: int, index: int, share: float):
-    if is_yielding(seed, index, share):
-        return draw_yielding_scene(np.random.default_rng([seed, index, 1]), reach=WIDE)
-    return draw_scene(np.random.default_rng([seed, index]), reach=WIDE)
 
 
 def run_one(seed: int, index: int, share: float) -> dict:

@@ -138,6 +138,8 @@ def _leave_boundary(kap, kpow, c, p, lo, hi, tau_max, escape, delta, out):
         if te > 1e3 * HMIN:
             hb, dhb = eval2(kap, c, p, te)
             clearance = escape * (edge - hb)
+            mid = ta + 0.5 * (te - ta)
+            can_halve = te - ta > HMIN and ta < mid < te and mid > 1e3 * HMIN
             if clearance <= 0.0 and escape * dhb > 16.0 * _EPS * bound_tab(kpow, c, p, 1, te):
                 # back at the edge before separating by delta, and moving out by more than the round-off of
                 # h' (which is all a slope is this close to a release whose low derivatives vanish): a grazing
@@ -145,10 +147,12 @@ def _leave_boundary(kap, kpow, c, p, lo, hi, tau_max, escape, delta, out):
                 if last_clear > 0.0:
                     hl, _ = eval2(kap, c, p, last_clear)
                     te = refine(kap, c, p, edge, escape, last_clear, te, hl, hb)
+                elif escape * hb > limit and can_halve:
+                    te = mid  # through the edge by more than delta, with no clear time to refine from: it
+                    continue  # came back before te, and a shorter stride finds where
                 return _touch(te, escape, steps, out)
             if not _behind_edge(ga, dga, escape * hb, escape * dhb, te - ta, m2, m3, m4, limit):
-                mid = ta + 0.5 * (te - ta)
-                if te - ta > HMIN and ta < mid < te and mid > 1e3 * HMIN:
+                if can_halve:
                     te = mid  # too long a stride to certify from the last certified time
                     continue
                 return _touch(te, escape, steps, out)  # no shorter stride certifies: the edge is met here

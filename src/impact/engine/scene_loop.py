@@ -870,6 +870,7 @@ def settle(t, model, springs, fric, harm, record, yld, st, scratch):
     w = scratch.seg_work
     kap, C, P, cs, ps, cq, pq, cache = w.kap, w.C, w.P, w.cs, w.ps, w.cq, w.pq, w.cache
     cursor, diag = scratch.cursor, scratch.diag
+    jolted = scratch.events.floors_done  # resolve_events is done with it
     ufloor, um, uload, ud = units.floor, units.mass, units.load, units.gap
     nf = building.mass.shape[0]
     nu = um.shape[0]
@@ -902,6 +903,9 @@ def settle(t, model, springs, fric, harm, record, yld, st, scratch):
                     offset[j] = side[j] * 0.5 * ud[j]
                     check[j] = 2
                     changed = True
+                    jolted[:] = False
+                    jolted[f] = True
+                    _follow_floor_jolts(nf, units, fric, st, jolted)
             elif check[j] == 2 and mode[j] == MODE_STUCK:
                 stuck_row(kap, C, P, f, side[j], uload[j] * r0, uload[j] * r1,
                           _unit_level(j, units, springs, fric), cq, pq)
@@ -1028,37 +1032,66 @@ def resolve_events(tau_ev, building, units, fric, st, events, vstick, diag):
             check[j] = 1
             if fric is not None:
                 sigma[j] = -side[j]
-    for j in range(nu):
+    _land_on_walls(building, units, fric, st, events, vstick, diag)
+    _follow_floor_jolts(nf, units, fric, st, events.floors_done)
+    return n_hit
+
+
+@njit(cache=True)
+def _land_on_walls(building, units, fric, st, events, vstick, diag):
+    """Every unit struck or touched at this instant rests on its wall (a rebound too slow to resolve merges it
+    with its floor, which jolts the floor: floors_done) or leaves it."""
+    ufloor, ud = units.floor, units.gap
+    mode, side, sigma, offset, escape, check, v = st.mode, st.side, st.sigma, st.offset, st.escape, st.check, st.v
+    ev_side, hit, touched, floors_done = events.side, events.hit, events.touched, events.floors_done
+    nf = building.mass.shape[0]
+    for j in range(ufloor.shape[0]):
+        if not (hit[j] or touched[j]):
+            continue
         f = ufloor[j]
-        if hit[j] or touched[j]:
-            side[j] = ev_side[j]
-            if fric is not None:
-                sigma[j] = -side[j]
-            if abs(v[nf + j] - v[f]) < vstick:
-                plastic_merge(j, building, units, mode, v, diag)
-                mode[j] = MODE_STUCK
-                offset[j] = side[j] * 0.5 * ud[j]
-                check[j] = 2
-            else:
-                escape[j] = side[j]
-                check[j] = 1
-        elif mode[j] == MODE_FLOOR and floors_done[f] and v[nf + j] != v[f]:
+        side[j] = ev_side[j]
+        if fric is not None:
+            sigma[j] = -side[j]
+        if abs(v[nf + j] - v[f]) < vstick:
+            plastic_merge(j, building, units, mode, v, diag)
+            floors_done[f] = True
+            mode[j] = MODE_STUCK
+            offset[j] = side[j] * 0.5 * ud[j]
+            check[j] = 2
+        else:
+            escape[j] = side[j]
+            check[j] = 1
+
+
+@njit(cache=True)
+def _follow_floor_jolts(nf, units, fric, st, jolted):
+    """The free and friction-held units on every floor whose velocity jumped at this instant (jolted: an impact or
+    a merge, every one of them applied first, so that a slide's direction is read from the floor's final
+    velocity): a unit friction held slips, a unit leaving a wall and driven back into it stops leaving, a sliding
+    unit's friction turns.  A unit leaving its wall after its own rebound keeps leaving, and friction opposes
+    that rebound already."""
+    ufloor = units.floor
+    mode, sigma, escape, escape_v, v = st.mode, st.sigma, st.escape, st.escape_v, st.v
+    for j in range(ufloor.shape[0]):
+        f = ufloor[j]
+        if not jolted[f]:
+            continue
+        if mode[j] == MODE_FLOOR and v[nf + j] != v[f]:
             # friction cannot pass on an impulse: the floor slips under the unit
             mode[j] = MODE_FREE
             sigma[j] = 1 if v[nf + j] > v[f] else -1
             escape_v[j] = 0
-        elif mode[j] == MODE_FREE and floors_done[f] and escape[j] * (v[nf + j] - v[f]) > 0.0:
+        elif mode[j] == MODE_FREE and escape[j] * (v[nf + j] - v[f]) > 0.0:
             # leaving a wall, and the floor's jolt drives it back into that wall: no longer leaving, so the
             # search finds the strike at once rather than after it has passed through the wall
             escape[j] = 0
             if fric is not None and fric[j] > 0.0:
                 sigma[j] = 1 if v[nf + j] > v[f] else -1
                 escape_v[j] = 0
-        elif mode[j] == MODE_FREE and fric is not None and floors_done[f] and v[nf + j] != v[f]:
+        elif mode[j] == MODE_FREE and fric is not None and v[nf + j] != v[f]:
             # a sliding unit's floor jumped under another unit's impact: friction now opposes the new slip
             sigma[j] = 1 if v[nf + j] > v[f] else -1
             escape_v[j] = 0
-    return n_hit
 
 
 @njit(cache=True)
