@@ -18,6 +18,7 @@ from pathlib import Path
 
 from impact import __version__
 from impact.closed_form.pushover import PATTERNS as PUSHOVER_PATTERNS
+from impact.model.kinds import KINDS, DamperKind
 from impact.model.params import IMPACT_KINDS, MAX_TUNING, STARTS, ParameterError, Protocol, System, ipc_label
 from impact.model.scene import DAMPER_KINDS, Damper, GroundMotion, Scene, paper_scene_from_system
 
@@ -105,9 +106,10 @@ def _model_flags(ap: argparse.ArgumentParser) -> None:
 
 
 def _system(args) -> System:
-    rp = args.rp if args.rp is not None else (1.0 if args.damper == "pid" else 0.0)
-    if args.damper == "cid" and args.rp is not None:
-        raise ParameterError("--rp is only for --damper pid")
+    pendulum = KINDS[args.damper].spring
+    rp = args.rp if args.rp is not None else (1.0 if pendulum else 0.0)
+    if not pendulum and args.rp is not None:
+        raise ParameterError(f"--rp is only for --damper {' or '.join(k for k in IMPACT_KINDS if KINDS[k].spring)}")
     return System.from_gap_ratio(args.damper, mu=args.mu, beta=args.beta, e=args.e, gap_ratio=args.gap_ratio,
                                  rp=rp, force_ratio=args.force_ratio, phase=args.phase, nu=args.nu,
                                  frequency_hz=args.frequency_hz, unit_m=args.unit_m)
@@ -212,9 +214,14 @@ def _quake_record(args):
 
 #: impact quake's damper flags: which each --damper kind uses, and the value of one not given (the others
 #: take Damper's own defaults)
-QUAKE_DAMPER_FLAGS = {"none": (), "cid": ("mu", "gap_m", "e", "nu", "units", "floor", "start"),
-                      "pid": ("mu", "gap_m", "e", "rp", "damping", "units", "floor", "start"),
-                      "tmd": ("mu", "tuning", "damping", "units", "floor")}
+def _kind_flags(kind: DamperKind) -> tuple[str, ...]:
+    """impact quake's flags of a damper kind, from what its units are made of (model.kinds)."""
+    return (("mu",) + (("gap_m", "e") if kind.walls else ()) + (("nu",) if kind.slides else ())
+            + ((kind.tuning_flag,) if kind.spring else ()) + (("damping",) if kind.dashpot else ())
+            + ("units", "floor") + (("start",) if kind.walls else ()))
+
+
+QUAKE_DAMPER_FLAGS = {"none": (), **{name: _kind_flags(kind) for name, kind in KINDS.items()}}
 #: the earthquake study's damper (config/config.yaml, loads: its larger mass ratio, e = 0.25, r' = 1), where impact
 #: run's are the paper's (mu = 0.01): a building's damper is sized against the building, not the paper's model; a
 #: TMD's tuning and damping not given are the study's design for the building instead (TMD_DESIGNED)
@@ -323,14 +330,14 @@ def cmd_quake(args) -> dict:
         flags = _tmd_design(args, flags, building)
     dampers = ()
     if args.damper != "none":
-        if args.damper != "tmd" and args.gap_m is None:
+        if KINDS[args.damper].walls and args.gap_m is None:
             raise ParameterError(f"--gap-m is required for --damper {args.damper}")
         dampers = (_quake_damper(args, flags, building.total_mass),)
     load = GroundMotion.from_record(record, pga_g=args.pga_g)
     scene = Scene(building, dampers, load, duration=args.duration_s, start=flags.get("start", "centre"),
                   collapse_drift_ratio=args.collapse_drift_ratio)
     if args.plot and not dampers:
-        raise ParameterError("--plot draws a damper's strokes and impacts: give --damper cid, pid or tmd")
+        raise ParameterError(f"--plot draws a damper's strokes and impacts: give --damper {' or '.join(KINDS)}")
     plotted = _plotted(scene, building.period1 / 50) if args.plot else {}
     res = simulate(scene, **plotted)
     if args.plot:

@@ -28,7 +28,7 @@ from numba.extending import intrinsic
 #: the storeys: floor masses, storey stiffness and damping matrices
 BuildingArrays = namedtuple("BuildingArrays", "mass stiffness damping")
 
-#: one entry per damper unit: kind (layout.KIND_*), floor index, mass, load per unit mass, gap, restitution
+#: one entry per damper unit: kind (what it is made of, layout.UNIT_* bits), floor index, mass, load per unit mass, gap, restitution
 UnitArrays = namedtuple("UnitArrays", "kind floor mass load gap restitution")
 
 #: the units' spring stiffness and dashpot (zero for a CID unit); absent when every unit is a CID

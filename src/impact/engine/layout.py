@@ -6,8 +6,8 @@ the diagnostics it has (the paper loop has no monitors and one unit, so no peak 
 impacts; the scene loop takes its amplitude from its monitors, not from D_X2WIN).
 """
 
-# unit kinds
-KIND_CID, KIND_PID, KIND_TMD = 0, 1, 2
+# what a unit is made of (model.kinds), as bits of its kind: a mass between walls, held by a spring (and dashpot)
+UNIT_WALLS, UNIT_SPRING = 1, 2
 
 # unit modes
 MODE_FREE = 0     # moving on its own (between the walls, or a TMD)

@@ -19,6 +19,7 @@ from impact.engine import paper_loop as K
 from impact.engine.contact import STICK_VELOCITY
 from impact.engine.diagnostics import read_diagnostics
 from impact.engine.jitcache import compile_lock
+from impact.model.kinds import KINDS
 from impact.model.params import Protocol, System, ipc_class, ipc_label
 
 _WARM: set = set()
@@ -32,7 +33,7 @@ def ensure_compiled(kind: str, friction: bool = False) -> None:
         return
     label = f"the engine's paper loop for the {kind.upper()}" + (" with friction" if friction else "")
     with compile_lock(f"paper-{kind}-{int(friction)}", label):
-        probe = System(kind, mu=0.01, beta=0.05, e=0.5, gap=1.0, rp=1.0 if kind == "pid" else 0.0,
+        probe = System(kind, mu=0.01, beta=0.05, e=0.5, gap=1.0, rp=1.0 if KINDS[kind].spring else 0.0,
                        nu=0.1 if friction else 0.0)
         _run_kernel(probe, 0.9, Protocol(periods=1.0, average_from=0.5), np.zeros(4), FREE_FLIGHT, 1)
     _WARM.add(key)
@@ -44,7 +45,7 @@ def pid_data(system: System, r: float):
     State (x, x', y, y'): x'' = -2 beta x' - x + mu wp^2 (y - x) + f sin, y'' = -wp^2 (y - x).
     Returns None for the CID, so the kernel compiles without the pendulum path.
     """
-    if system.kind != "pid":
+    if not KINDS[system.kind].spring:
         return None
     mu, b, wp2 = system.mu, system.beta, system.rp ** 2
     a = np.array([

@@ -57,13 +57,13 @@ def as_paper_system(scene: Scene) -> System | None:
         return None
     d = scene.dampers[0]
     load = scene.load
-    if d.kind not in ("cid", "pid") or d.units != 1 or d.damping != 0.0 or d.floor not in (None, 1):
+    if not d.kind_spec.paper or d.units != 1 or d.damping != 0.0 or d.floor not in (None, 1):
         return None
     if not isinstance(load, Harmonic) or load.floor not in (None, 1) or scene.unit_starts is not None:
         return None
     if b.damping[0, 0] != 2.0 * b.zeta:
         return None  # the paper's damping is C = 2 beta
-    return System(d.kind, mu=d.mass, beta=b.zeta, e=d.e, gap=d.gap, rp=d.tuning if d.kind == "pid" else 0.0,
+    return System(d.kind, mu=d.mass, beta=b.zeta, e=d.e, gap=d.gap, rp=d.tuning if d.kind_spec.spring else 0.0,
                   force_ratio=load.amplitude, phase=load.phase, nu=d.nu)
 
 

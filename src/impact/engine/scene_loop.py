@@ -94,8 +94,6 @@ from impact.engine.layout import (
     EV_UNLOAD,
     EV_WALL,
     EV_YIELD,
-    KIND_PID,
-    KIND_TMD,
     MODE_FLOOR,
     MODE_FREE,
     MODE_LOCKED,
@@ -121,6 +119,8 @@ from impact.engine.layout import (
     R_W0,
     R_W1,
     R_X,
+    UNIT_SPRING,
+    UNIT_WALLS,
 )
 from impact.engine.modal import (
     amplitude_moduli,
@@ -212,7 +212,7 @@ def _unit_level(j, units, springs, fric):
     """wp^2 d/2 - a_f: what the contact force must overcome to release a unit at its wall."""
     level = 0.0
     if springs is not None:
-        if units.kind[j] == KIND_PID:
+        if units.kind[j] & UNIT_SPRING:
             level += springs.stiffness[j] / units.mass[j] * 0.5 * units.gap[j]
     if fric is not None:
         level -= fric[j]
@@ -304,7 +304,7 @@ def search_events(w, nf, units, springs, fric, tau_max, r0, r1, ek_tau):
     for j in range(um.shape[0]):
         ev_t[j] = np.inf
         ev_kind[j] = EV_NONE
-        if ukind[j] == KIND_TMD or mode[j] == MODE_LOCKED:
+        if not ukind[j] & UNIT_WALLS or mode[j] == MODE_LOCKED:
             continue
         f = ufloor[j]
         half = 0.5 * ud[j]

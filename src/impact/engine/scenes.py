@@ -32,8 +32,9 @@ from impact.engine.diagnostics import read_diagnostics
 from impact.engine.jitcache import compile_lock
 from impact.engine.scene_loop import run_scene
 from impact.model.building import Building
+from impact.model.kinds import DamperKind
 from impact.model.params import ParameterError
-from impact.model.scene import DAMPER_KINDS, Damper, ForceRecord, GroundMotion, Harmonic, Scene
+from impact.model.scene import Damper, ForceRecord, GroundMotion, Harmonic, Scene
 
 CACHE_SLOTS = 16        # configurations whose eigen-data are kept at once
 
@@ -111,15 +112,20 @@ class StoreyResponse:
 # assembly of the kernel's arrays
 # ----------------------------------------------------------------------------
 
+def _unit_bits(kind: DamperKind) -> int:
+    """A unit's kind as the engine reads it: what it is made of (layout.UNIT_*), not its name."""
+    return (L.UNIT_WALLS if kind.walls else 0) | (L.UNIT_SPRING if kind.spring else 0)
+
+
 def _unit_arrays(scene: Scene, omega1: float):
     units = scene.unit_list()
-    kind = np.array([DAMPER_KINDS.index(d.kind) for _, d in units], dtype=np.int64)
+    kind = np.array([_unit_bits(d.kind_spec) for _, d in units], dtype=np.int64)
     floor = np.array([scene.floor_index(d.floor) for _, d in units], dtype=np.int64)
     mass = np.array([d.mass / d.units for _, d in units])
     gap = np.array([d.gap if d.has_walls else 0.0 for _, d in units])
     e = np.array([d.e for _, d in units])
-    k = np.array([m * (d.tuning * omega1) ** 2 if d.kind != "cid" else 0.0 for m, (_, d) in zip(mass, units)])
-    c = np.array([2.0 * m * d.damping * d.tuning * omega1 if d.kind != "cid" else 0.0
+    k = np.array([m * (d.tuning * omega1) ** 2 if d.kind_spec.spring else 0.0 for m, (_, d) in zip(mass, units)])
+    c = np.array([2.0 * m * d.damping * d.tuning * omega1 if d.kind_spec.dashpot else 0.0
                   for m, (_, d) in zip(mass, units)])
     a_f = np.array([d.nu * scene.gravity for _, d in units])
     return kind, floor, mass, gap, e, k, c, a_f
@@ -173,7 +179,7 @@ def _monitors(scene: Scene, nfull: int):
         r[scene.floor_index(d.floor)] -= 1.0
         rows.append(r)
         kinds.append(L.MON_DISP)
-        caps.append(0.5 * d.gap if d.kind in ("cid", "pid") else math.inf)
+        caps.append(0.5 * d.gap if d.has_walls else math.inf)
         first += int(d.units)
     return np.array(rows), np.array(kinds, dtype=np.int64), np.array(caps)
 
@@ -184,7 +190,7 @@ def _initial_state(scene: Scene, floor: np.ndarray, gap: np.ndarray, kind: np.nd
     mode = np.zeros(len(gap), dtype=np.int64)
     side = np.zeros(len(gap), dtype=np.int64)
     for j in range(len(gap)):
-        if kind[j] == L.KIND_TMD:
+        if not kind[j] & L.UNIT_WALLS:
             continue
         if gap[j] == 0.0:
             mode[j] = L.MODE_LOCKED
@@ -239,11 +245,11 @@ def _scene_arrays(scene: Scene):
         raise ParameterError("a harmonic load acts on a floor, not on a damper unit")
     building = BuildingArrays(b.masses.copy(), b.stiffness, b.damping.copy())
     units = UnitArrays(kind, floor, mass, uload, gap, e)
-    springs = SpringArrays(k, c) if np.any(kind != L.KIND_CID) else None
+    springs = SpringArrays(k, c) if np.any(kind & L.UNIT_SPRING) else None
     fric = a_f if np.any(a_f > 0.0) else None
     rows, kinds, caps = _monitors(scene, nf + len(mass))
     monitors = MonitorArrays(rows, kinds, np.where(kinds == L.MON_ACCEL, mon_rec, 0.0), caps)
-    n_spring = int(np.sum(kind != L.KIND_CID)) if springs is not None else 0
+    n_spring = int(np.count_nonzero(kind & L.UNIT_SPRING))
     p = np.zeros(L.NPAR)
     p[L.P_T0] = 0.0
     p[L.P_TEND] = scene.t_end

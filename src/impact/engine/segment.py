@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from impact.engine.layout import BRANCH_ELASTIC, KIND_CID, MODE_FREE, NPOLY
+from impact.engine.layout import BRANCH_ELASTIC, MODE_FREE, NPOLY, UNIT_SPRING
 
 _SERIES = 0.5  # |z T| below which the integrals use their power series
 # _phi0's series: below 0.05 its closed form loses more than eps / 0.05 = 4e-15 (relative) to cancellation,
@@ -260,7 +260,7 @@ def _assemble(building, units, springs, yld, load_vec, mode, cache, s):
         fidx[s, i] = i
     if springs is not None:
         for j in range(nu):
-            if ukind[j] != KIND_CID and mode[j] == MODE_FREE:
+            if ukind[j] & UNIT_SPRING and mode[j] == MODE_FREE:
                 fidx[s, n] = nf + j
                 n += 1
     m = np.zeros(n)
@@ -495,7 +495,7 @@ def build_segment(w, s, units, springs, fric, yld, harmonic, load_at, omega):
             for k in range(NPOLY):
                 P[row, k] = P[f, k]
             P[row, 0] += offset[j]
-        elif units.kind[j] == KIND_CID:
+        elif not units.kind[j] & UNIT_SPRING:
             for k in range(nt):
                 C[row, k] = 0.0
             a0 = uload[j] * r0
@@ -580,7 +580,7 @@ def _copy_identical_rows(units, springs, mode, nf, q, v, C, P):
     kind = units.kind
     for j in range(1, kind.shape[0]):
         i = j - 1
-        if kind[j] == KIND_CID or mode[j] != MODE_FREE or mode[i] != MODE_FREE:
+        if not kind[j] & UNIT_SPRING or mode[j] != MODE_FREE or mode[i] != MODE_FREE:
             continue
         if not same_unit(units, springs, i, j):
             continue

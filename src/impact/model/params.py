@@ -18,7 +18,11 @@ from dataclasses import KW_ONLY, asdict, dataclass, field
 
 import numpy as np
 
-IMPACT_KINDS = ("cid", "pid")  # the dampers with walls: the paper's two
+from impact.model.kinds import KINDS, impact_kinds, sliding_kinds
+
+IMPACT_KINDS = impact_kinds()  # the dampers with walls (model.kinds): the paper's two
+#: the kinds the paper's system (System, the paper's loop) runs
+PAPER_KINDS = tuple(name for name, k in KINDS.items() if k.paper)
 STARTS = ("centre", "left", "right")
 G_GRAV = 9.80665  # m/s^2, standard gravity
 
@@ -118,16 +122,19 @@ class System:
     unit_m: float = 0.01
 
     def __post_init__(self):
-        check_choice("kind", self.kind, IMPACT_KINDS)
+        check_choice("kind", self.kind, PAPER_KINDS)
         check_fields(self, mu="(0, 10]", beta="[0, 1)", e="[0, 1]", gap="[0, 1e12]", rp="[0, 1e4]",
                      force_ratio="(0, 1e12]", phase=f"[{-2 * math.pi}, {2 * math.pi}]", nu="[0, 100]",
                      frequency_hz="(0, 1e6]", unit_m="(0, 1e6]")
-        if self.kind == "pid" and self.rp == 0.0:
-            raise ParameterError("rp = 0.0 is out of range for kind 'pid': allowed (0, 10000]; a PID with r' = 0 is the CID")
-        if self.kind == "cid" and self.rp != 0.0:
-            raise ParameterError(f"rp = {self.rp!r} is not allowed for kind 'cid': the CID has no pendulum")
-        if self.kind == "pid" and self.nu != 0.0:
-            raise ParameterError("nu is only defined for kind 'cid' (the pendulum mass does not slide on a floor)")
+        kind = KINDS[self.kind]
+        if kind.spring and self.rp == 0.0:
+            raise ParameterError(f"rp = 0.0 is out of range for kind {self.kind!r}: allowed (0, 10000]; a PID with "
+                                 "r' = 0 is the CID")
+        if not kind.spring and self.rp != 0.0:
+            raise ParameterError(f"rp = {self.rp!r} is not allowed for kind {self.kind!r}: the CID has no pendulum")
+        if not kind.slides and self.nu != 0.0:
+            raise ParameterError(f"nu is only defined for kind {sliding_kinds()} (the pendulum mass does not slide on a "
+                                 "floor)")
 
     @classmethod
     def from_gap_ratio(cls, kind: str, mu: float, beta: float, e: float, gap_ratio: float, **kw) -> "System":

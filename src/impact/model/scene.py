@@ -21,6 +21,7 @@ from dataclasses import KW_ONLY, dataclass
 import numpy as np
 
 from impact.model.building import Building
+from impact.model.kinds import DamperKind, damper_kinds, kind_of, sliding_kinds
 from impact.model.params import (
     G_GRAV,
     MAX_TUNING,
@@ -38,7 +39,7 @@ from impact.model.params import (
 #: at 7.4e-6 k a probe scene's energy balance lost 1.6e-7
 MIN_TANGENT = 1e-4
 
-DAMPER_KINDS = ("cid", "pid", "tmd")
+DAMPER_KINDS = damper_kinds()  # the registry's kinds (model.kinds), as the study lists them
 
 
 @dataclass(frozen=True)
@@ -68,20 +69,27 @@ class Damper:
     units: int = 1
 
     def __post_init__(self):
-        check_choice("kind", self.kind, DAMPER_KINDS)
-        tuning_floor = "[0" if self.kind == "cid" else "(0"
+        check_choice("kind", self.kind, damper_kinds())  # the registry as it is now: a kind added later counts
+        kind = kind_of(self.kind)
+        tuning_floor = "(0" if kind.spring else "[0"
         check_fields(self, mass="(0, 1e15]", gap="[0, 1e12]", e="[0, 1]", tuning=f"{tuning_floor}, {MAX_TUNING:g}]",
                      damping="[0, 1)", nu="[0, 100]")
         check_integer("units", self.units, 1, 60)
-        if self.nu > 0.0 and self.kind != "cid":
-            raise ParameterError("nu is only defined for kind 'cid' (only a free mass slides on a floor)")
-        if self.kind == "tmd" and self.gap:
-            raise ParameterError("gap is not defined for kind 'tmd' (a TMD has no walls): leave it at 0")
+        if self.nu > 0.0 and not kind.slides:
+            raise ParameterError(f"nu is only defined for kind {sliding_kinds()} (only a free mass slides on a floor)")
+        if not kind.walls and self.gap:
+            raise ParameterError(f"gap is not defined for kind {self.kind!r} (a {kind.title} has no walls): leave "
+                                 "it at 0")
         _check_floor("floor", self.floor)
 
     @property
+    def kind_spec(self) -> DamperKind:
+        """What this damper's units are made of (model.kinds)."""
+        return kind_of(self.kind)
+
+    @property
     def has_walls(self) -> bool:
-        return self.kind != "tmd"
+        return self.kind_spec.walls
 
 
 @dataclass(frozen=True, eq=False)
@@ -243,7 +251,7 @@ class Scene:
         if len(starts) != len(units):
             raise ParameterError(f"unit_starts has {len(starts)} values for {len(units)} damper units: give one per unit")
         for k, (x, (_, d)) in enumerate(zip(starts, units)):
-            half = 0.5 * d.gap if d.kind != "tmd" else 0.0
+            half = 0.5 * d.gap if d.has_walls else 0.0
             _check(f"unit_starts[{k}]", x, -half, half)
         object.__setattr__(self, "unit_starts", starts)
 
@@ -303,7 +311,7 @@ def paper_scene(kind: str, mu: float, beta: float, e: float, gap: float, r: floa
                 phase: float = 0.0, max_events_per_period: int = 20000) -> Scene:
     """The paper's one-storey structure in model units (M = 1, omega = 1) as a scene."""
     building = Building.paper(beta)
-    damper = Damper(kind, mass=mu, gap=gap, e=e, tuning=rp if kind == "pid" else 0.0, nu=nu, units=units)
+    damper = Damper(kind, mass=mu, gap=gap, e=e, tuning=rp if kind_of(kind).spring else 0.0, nu=nu, units=units)
     period = 2.0 * math.pi
     return Scene(building, (damper,), Harmonic(force_ratio, r, phase), duration=periods * period,
                  window=average_from * period, start=start, gravity=gravity,

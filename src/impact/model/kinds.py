@@ -1,0 +1,75 @@
+"""The kinds of damper: one entry each, read by the model's checks, the engine, the command line and the rules.
+
+A kind is what its units are made of, not a name the engine branches on: a mass between walls a gap apart
+(the CID), held by a spring tuned to the building (the PID's pendulum, the TMD's spring), with a dashpot, on a
+floor it may slide on.  The engine builds a unit's arrays from these properties alone, so a new kind made of
+the same parts (a TMD with stops, a damped pendulum) is one entry here; one with new physics is an entry and
+that physics in the engine.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class DamperKind:
+    """What a kind of damper unit is made of.
+
+    name      the kind's key (Damper.kind, the command line's --damper, the rules' {damper})
+    title     its name in words, for labels and help
+    walls     its mass strikes walls a gap apart (an impact damper: gap and restitution apply)
+    spring    its mass hangs on a spring tuned to the building (tuning applies; else tuning is ignored)
+    dashpot   its spring has a dashpot (damping applies)
+    slides    its mass rests on its floor and may slide there (Coulomb friction nu applies)
+    paper     the paper's own system (impact.model.params.System): a one-unit damper of this kind alone on a
+              one-storey building under a harmonic force runs in the paper's loop
+    tuning_flag  the command line's name of its spring's tuning (the paper's r' for a pendulum)
+    """
+
+    name: str
+    title: str
+    walls: bool
+    spring: bool
+    dashpot: bool
+    slides: bool
+    paper: bool
+    tuning_flag: str = "tuning"
+
+    @property
+    def linear(self) -> bool:
+        """Without walls a damper is linear: closed forms and the linear engine apply."""
+        return not self.walls
+
+
+#: every kind, by name, in the order the study lists them
+KINDS: dict[str, DamperKind] = {
+    k.name: k
+    for k in (
+        DamperKind("cid", "classical impact damper", walls=True, spring=False, dashpot=False, slides=True,
+                   paper=True),
+        DamperKind("pid", "pendulum impact damper", walls=True, spring=True, dashpot=True, slides=False,
+                   paper=True, tuning_flag="rp"),
+        DamperKind("tmd", "tuned mass damper", walls=False, spring=True, dashpot=True, slides=False, paper=False),
+    )
+}
+
+
+def damper_kinds() -> tuple[str, ...]:
+    """The kinds' names, in the registry's order (read at call time: a kind registered later is listed)."""
+    return tuple(KINDS)
+
+
+def impact_kinds() -> tuple[str, ...]:
+    """The kinds with walls, whose units strike."""
+    return tuple(name for name, k in KINDS.items() if k.walls)
+
+
+def sliding_kinds() -> str:
+    """The kinds whose mass may slide on its floor, as a message names them ('cid', or 'cid' or 'x')."""
+    return " or ".join(repr(name) for name, k in KINDS.items() if k.slides)
+
+
+def kind_of(name: str) -> DamperKind:
+    """The kind named `name`, which the Damper's check has found in the registry."""
+    return KINDS[name]

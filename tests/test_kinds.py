@@ -1,0 +1,64 @@
+"""The damper kinds' registry (impact.model.kinds): a kind made of parts the engine knows is one entry.
+
+The toy kind here, a TMD with stops (a tuned mass whose stroke walls end, which the study's TMDs lack), is
+registered in the test alone: no other file of the package names it.
+"""
+
+import numpy as np
+import pytest
+
+from impact.engine.run import simulate
+from impact.model import kinds
+from impact.model.building import Building
+from impact.model.kinds import DamperKind
+from impact.model.params import ParameterError
+from impact.model.scene import Damper, Harmonic, Scene
+
+STOPPED_TMD = DamperKind("stopped_tmd", "tuned mass damper with stops", walls=True, spring=True, dashpot=True,
+                         slides=False, paper=False)
+
+
+@pytest.fixture
+def stopped_tmd(monkeypatch):
+    monkeypatch.setitem(kinds.KINDS, STOPPED_TMD.name, STOPPED_TMD)
+    return STOPPED_TMD.name
+
+
+def _scene(kind, gap, building=Building.uniform(3, 1.0, 0.02)):
+    mass = 0.03 * building.total_mass
+    omega = building.omega1
+    load = Harmonic(0.02 * building.total_mass * omega ** 2 * 0.05, omega, floor=1)
+    damper = Damper(kind, mass, gap=gap, e=0.6, tuning=0.97, damping=0.05)
+    return Scene(building, (damper,), load, duration=20.0, start="centre")
+
+
+def test_the_registry_is_what_the_model_checks_against(stopped_tmd):
+    assert stopped_tmd in kinds.damper_kinds() and stopped_tmd in kinds.impact_kinds()
+    with pytest.raises(ParameterError, match="nu is only defined for kind 'cid'"):
+        Damper(stopped_tmd, 1.0, gap=0.1, nu=0.1)
+    with pytest.raises(ParameterError, match="tuning"):
+        Damper(stopped_tmd, 1.0, gap=0.1, tuning=0.0)  # a spring's tuning is above 0
+    with pytest.raises(ParameterError, match="gap is not defined for kind 'tmd'"):
+        Damper("tmd", 1.0, gap=0.1)
+
+
+def test_a_kind_registered_alone_runs_and_is_the_tmd_while_its_stops_are_out_of_reach(stopped_tmd):
+    """Stops wider than the TMD's stroke are never struck: the run is the TMD's, to the last bits."""
+    free = simulate(_scene("tmd", 0.0), measures=("peaks",))
+    far = simulate(_scene(stopped_tmd, 100.0 * free.peak_strokes[0]), measures=("peaks",))
+    assert far.impacts == 0
+    np.testing.assert_allclose(far.final_q, free.final_q, rtol=0, atol=1e-12 * np.max(np.abs(free.final_q)))
+    assert far.peak_roof_displacement == pytest.approx(free.peak_roof_displacement, rel=1e-12)
+
+
+def test_a_kind_registered_alone_strikes_its_stops_within_the_engines_promises(stopped_tmd):
+    """Stops at half the free stroke: the mass strikes them, its stroke stays within them, the energy balances."""
+    free = simulate(_scene("tmd", 0.0), measures=("peaks",))
+    gap = free.peak_strokes[0]  # walls at +-half the free stroke
+    stopped = simulate(_scene(stopped_tmd, gap), measures=("peaks",))
+    diag = stopped.diagnostics
+    assert stopped.impacts > 10
+    assert stopped.peak_strokes[0] <= 0.5 * gap * (1 + 1e-9)
+    assert abs(diag["energy_residual"]) < 1e-9
+    assert diag["max_penetration"] <= 1e-9 * gap
+    assert diag["impact_losses"] > 0.0  # e = 0.6: each strike loses (1 - e^2) of its relative kinetic energy
