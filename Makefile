@@ -12,7 +12,7 @@ STAMP  := $(VENV)/.installed
 # compile only the kernels they use (make study measured 1,175 s cold, against 5 to 6 min of compiling then 1,034 s)
 COMPILED := $(VENV)/.compiled
 
-.PHONY: setup study paper test smoke lint docs screenshots bench peer clean chromium
+.PHONY: setup study paper test smoke lint docs screenshots bench peer clean chromium debug
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
@@ -38,6 +38,13 @@ paper: $(STAMP)
 
 smoke: $(STAMP)
 	$(BIN)/snakemake --cores $(CORES) --configfile config/smoke.yaml
+
+# one job of the study again (the one that writes TARGET), with Snakemake's copy of its script kept: that copy
+# holds the job's inputs, outputs, parameters and log, so it runs alone, under a debugger, as often as wanted
+debug: $(STAMP)
+	@test -n "$(TARGET)" || { echo "give the file the job writes: make debug TARGET=results/..."; exit 2; }
+	$(BIN)/snakemake $(TARGET) --force --cores 1 --skip-script-cleanup $(SNAKEMAKE_ARGS)
+	@echo "the job's script, to run alone: $$(ls -t .snakemake/scripts/*.py | head -1)"
 
 test: $(COMPILED) chromium
 	$(BIN)/python -m pytest -q

@@ -24,7 +24,7 @@ def compiled():
 
 @pytest.mark.parametrize("e,n", [(0.37, 1.5), (0.46, 2.0), (0.58, 2.0), (0.64, 2.0), (0.9, 1.5)])
 def test_calibrated_chi_gives_e_in_the_scaled_contact(e, n):
-    chi = R.calibrate_chi(e, n)
+    chi = R.solve_chi(e, n)
     assert chi > 0
     assert R.scaled_restitution(chi, n) == pytest.approx(e, abs=1e-8)
     # Hunt and Crossley's small-damping estimate 3(1-e)/2 is not accurate this far from e = 1
@@ -32,20 +32,22 @@ def test_calibrated_chi_gives_e_in_the_scaled_contact(e, n):
 
 
 def test_one_calibration_serves_every_job(monkeypatch):
-    """The stage calibrates each wall once; a job that adopts the file never solves for chi again."""
+    """The stage calibrates each wall once; a job given the file's calibrations never solves for chi again, and
+    a calibration that no longer matches its wall's e is not used."""
     walls = R.contact_calibrations(None)
     assert [w["wall"] for w in walls] == WALLS
     assert {w["n"] for w in walls} == {1.5, 2.0}
-    monkeypatch.setattr(R, "_ADOPTED_CHI", {})
-    R.adopt_calibrations(walls)
+    cfg = R.with_calibrations(None, walls)
 
     def no_solving(e, n):
         raise AssertionError(f"chi solved again for e={e}, n={n}")
 
     monkeypatch.setattr(R, "solve_chi", no_solving)
-    cfg = R.merged_config(None)
     for w in walls:
         assert R.wall_contact(cfg, w["wall"], 0.02).chi == w["chi"]
+    stale = [{**walls[0], "e": walls[0]["e"] + 0.01}]
+    with pytest.raises(AssertionError, match="chi solved again"):
+        R.wall_contact(R.with_calibrations(None, stale), walls[0]["wall"], 0.02)
 
 
 @pytest.mark.parametrize("wall", WALLS)

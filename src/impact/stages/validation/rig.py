@@ -42,7 +42,7 @@ What the rig models beyond Eq. (4)
   unbounded damping coefficient).  In scaled variables the contact depends on
   chi and n only, so the restitution of an isolated contact is independent of
   the speed, of k and of the masses; chi is **calibrated by root finding** so
-  that it equals the material's e (:func:`calibrate_chi`), and the calibration
+  that it equals the material's e (:func:`solve_chi`), and the calibration
   is verified on isolated impacts in the full rig (:func:`isolated_impact`).
   Stiffness: steel walls Hertz (sphere on flat, E = 210 GPa, nu = 0.3;
   n = 3/2; contact ~0.1--0.3 ms at the rig's 0.05--0.2 m/s); linings a thin
@@ -128,18 +128,6 @@ def _scaled_contact(chi: float, n: float) -> tuple[float, float, float]:
     return float(-w_end), float(sol.t_events[0][0]), float(np.max(sol.y[0]))
 
 
-# chi already solved for, by (e, n): an earlier calibration adopted with adopt_calibrations
-_ADOPTED_CHI: dict[tuple[float, float], float] = {}
-
-
-def calibrate_chi(e: float, n: float) -> float:
-    """Hunt--Crossley damping chi giving restitution e for F = k delta^n (1 + chi delta'/v_in).
-
-    An adopted calibration (:func:`adopt_calibrations`) is used as it is; otherwise :func:`solve_chi`.
-    """
-    return _ADOPTED_CHI.get((float(e), float(n))) or solve_chi(e, n)
-
-
 @functools.lru_cache(maxsize=64)
 def solve_chi(e: float, n: float) -> float:
     """Hunt--Crossley damping chi giving restitution e for F = k delta^n (1 + chi delta'/v_in).
@@ -209,7 +197,8 @@ def wall_contact(cfg: dict, wall: str, ball_radius_m: float) -> Wall:
     except ValueError as err:
         raise ValueError(f"wall {wall}: {err}") from None
     scale = float(cfg["contact"].get("stiffness_scale", 1.0))
-    return Wall(wall, e, k * scale, n, calibrate_chi(e, n), thick)
+    chi = float(spec["chi"]) if "chi" in spec else solve_chi(e, n)  # calibrated earlier (with_calibrations)
+    return Wall(wall, e, k * scale, n, chi, thick)
 
 
 def contact_calibrations(cfg: dict | None = None) -> list[dict]:
@@ -225,13 +214,16 @@ def contact_calibrations(cfg: dict | None = None) -> list[dict]:
     return out
 
 
-def adopt_calibrations(entries) -> None:
-    """Use the chi of an earlier :func:`contact_calibrations` instead of solving for it again.
-
-    Keyed by (e, n), so an entry that no longer matches the configuration is simply not used.
-    """
+def with_calibrations(cfg: dict | None, entries) -> dict:
+    """``cfg`` (defaults filled in) with each wall's chi from an earlier :func:`contact_calibrations`, so that
+    the rig does not solve for it again.  An entry whose e and n no longer match its wall's is not used."""
+    cfg = merged_config(cfg)
+    walls = {wall: dict(spec) for wall, spec in cfg["walls"].items()}
     for item in entries:
-        _ADOPTED_CHI[(float(item["e"]), float(item["n"]))] = float(item["chi"])
+        spec = walls.get(item["wall"])
+        if spec is not None and (float(spec["e"]), _wall_law(cfg, spec, 1.0)[1]) == (item["e"], item["n"]):
+            spec["chi"] = float(item["chi"])
+    return {**cfg, "walls": walls}
 
 
 def pendulum_length(rp: float, omega: float, ball_radius_m: float, g: float = G_STANDARD,

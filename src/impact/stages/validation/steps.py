@@ -30,7 +30,7 @@ from impact.stages.validation.comparison import (
 )
 from impact.stages.validation.grid import Case
 from impact.stages.validation.measurements import Measurement, write_measurement
-from impact.stages.validation.rig import adopt_calibrations, contact_calibrations
+from impact.stages.validation.rig import contact_calibrations, with_calibrations
 
 # where each figure's records go, under the stage's records folder (one folder per panel)
 FIG3_RECORDS = ("fig3a", "fig3b_paper_grid", "fig3b_fine_grid")
@@ -74,9 +74,10 @@ def write_contact_laws(cfg: dict, path) -> list[dict]:
     return walls
 
 
-def adopt_contact_laws(path) -> None:
-    """Take each wall's chi from :func:`write_contact_laws`' file rather than solving for it again."""
-    adopt_calibrations(json.loads(Path(path).read_text())["walls"])
+def with_contact_laws(cfg: dict, path) -> dict:
+    """The rig's configuration with each wall's chi from :func:`write_contact_laws`' file, which the rig then
+    uses rather than solving for it again."""
+    return with_calibrations(cfg, json.loads(Path(path).read_text())["walls"])
 
 
 # ----------------------------------------------------------------------------
