@@ -100,8 +100,8 @@ def test_quake_tunes_a_tmd_for_the_building_unless_told(capsys):
     """A TMD given no tuning or damping is the study's design for the building and its mass (Den Hartog on the
     first mode), which lowers the roof's peak under the README's own example, where an untuned, undamped one
     (f = 1, no damping: the old defaults) raised it."""
+    from impact.closed_form.tmd import tuned_for
     from impact.model.building import Building
-    from impact.stages.loads.plan import tmd_damper
 
     quake = ["quake", "--record", "fema-farfield:12:a", "--storeys", "3"]
     peaks = {}
@@ -111,7 +111,7 @@ def test_quake_tunes_a_tmd_for_the_building_unless_told(capsys):
         out = json.loads(capsys.readouterr().out)
         peaks[name] = out["peak_roof_displacement_m"]
         if name == "designed":
-            design = tmd_damper(Building.uniform(3, 1.0, 0.02), 0.02)
+            design = tuned_for(Building.uniform(3, 1.0, 0.02), 0.02)
             assert out["dampers"][0]["tuning"] == design.tuning and out["dampers"][0]["damping"] == design.damping
     assert peaks["designed"] < peaks["bare"] < peaks["untuned"], peaks
 

@@ -14,12 +14,12 @@ from impact.closed_form.pushover import pushover
 from impact.engine.spectra import spectral_acceleration
 from impact.model.params import G_GRAV, ParameterError
 from impact.model.suites import load_suite_record
+from impact.stages.buildings import make_building
 from impact.stages.collapse import p695 as P
 from impact.stages.collapse import plan as CP
 from impact.stages.collapse import runs as CR
 from impact.stages.collapse import tables as CT
 from impact.stages.ida import runs as IR
-from impact.stages.loads.plan import make_building
 
 LOADS = {"storeys": [1, 3, 5], "periods_s": [0.5, 1.0, 2.0], "zeta": 0.02, "mass_ratios": [0.01, 0.02], "e": 0.25}
 #: both components of one record, and another record: the bootstrap resamples records

@@ -9,6 +9,7 @@ import pytest
 from scipy import signal
 from test_scene import _linear_roof
 
+from impact.closed_form.tmd import tuned_for
 from impact.engine.scenes import simulate_scene
 from impact.engine.spectra import spectral_acceleration
 from impact.model.building import Building
@@ -23,10 +24,10 @@ from impact.model.suites import (
     stored_pseudo_acceleration,
     suite_keys,
 )
+from impact.stages import buildings
 from impact.stages.ida import plan as IP
 from impact.stages.ida import runs as IR
 from impact.stages.ida import tables as IT
-from impact.stages.loads import plan as LP
 
 PERIODS = (0.5, 1.0, 2.0)   # the loads stage's fundamental periods
 ALL_KEYS = suite_keys("farfield") + suite_keys("nearfield")
@@ -112,11 +113,11 @@ def test_a_record_of_zeros_has_no_intensity_to_scale_to():
 @pytest.mark.parametrize("key", SAMPLE_KEYS)
 def test_an_untouchable_gap_gives_the_linear_building_under_each_suite(key):
     """The stage's 3-storey building with a CID it never reaches, against lsim (first-order hold) at the samples."""
-    building = LP.make_building(LOADS, "s3_T1")
+    building = buildings.make_building(LOADS, "s3_T1")
     rec = load_suite_record(key)
     gm = IR.scaled_motion(rec, spectral_acceleration(rec, building.period1), 0.5)
     t, ref = _linear_roof(building, gm.accel, gm.dt)
-    damper = LP.impact_damper("cid", building, 0.02, gap=1e6, e=0.25)
+    damper = buildings.impact_damper("cid", building, 0.02, gap=1e6, e=0.25)
     res = simulate_scene(Scene(building, (damper,), gm), times=t)
     assert res.impacts == 0
     assert np.max(np.abs(res.samples["q"][:, 2] - ref)) <= 1e-9 * np.max(np.abs(ref))
@@ -124,8 +125,8 @@ def test_an_untouchable_gap_gives_the_linear_building_under_each_suite(key):
 
 @pytest.mark.parametrize("kind", ["bare", "tmd"])
 def test_the_bare_building_and_the_tmd_scale_exactly_with_the_level(kind):
-    building = LP.make_building(LOADS, "s3_T1")
-    dampers = () if kind == "bare" else (LP.tmd_damper(building, 0.02),)
+    building = buildings.make_building(LOADS, "s3_T1")
+    dampers = () if kind == "bare" else (tuned_for(building, 0.02),)
     rec = load_suite_record(SAMPLE_KEYS[3])
     sa = spectral_acceleration(rec, building.period1)
     levels = [0.05, 0.7, 1.5]

@@ -12,6 +12,7 @@ from impact.engine.scenes import simulate_scene
 from impact.model.params import ParameterError
 from impact.model.records import load_record
 from impact.model.scene import DAMPER_KINDS, GroundMotion, Scene
+from impact.stages import buildings
 from impact.stages.loads import plan as LP
 from impact.stages.loads import runs as LR
 from impact.stages.loads import tables as LT
@@ -29,17 +30,17 @@ CFG = {
 
 @pytest.fixture(scope="module")
 def study():
-    bare = {b: LR.bare_runs(CFG, b) for b in LP.buildings(CFG)}
+    bare = {b: LR.bare_runs(CFG, b) for b in buildings.buildings(CFG)}
     dampers = {(b, k): LR.damper_runs(CFG, b, k, bare[b]) for b in bare for k in DAMPER_KINDS}
     return bare, dampers, LT.collect(bare, dampers)
 
 
 def test_untouchable_gap_gives_the_bare_building_under_el_centro_to_1e_9():
     """The stage's five-storey building with a CID it never touches, against lsim of the linear building."""
-    building = LP.make_building({**CFG, "storeys": [5], "periods_s": [2.0]}, "s5_T2")
+    building = buildings.make_building({**CFG, "storeys": [5], "periods_s": [2.0]}, "s5_T2")
     gm = GroundMotion.from_record(load_record("elcentro"), pga_g=0.35)
     t, ref = _linear_roof(building, gm.accel, gm.dt)
-    damper = LP.impact_damper("cid", building, 0.02, gap=1e6, e=0.25)
+    damper = buildings.impact_damper("cid", building, 0.02, gap=1e6, e=0.25)
     res = simulate_scene(Scene(building, (damper,), gm), times=t)
     assert res.impacts == 0
     assert np.max(np.abs(res.samples["q"][:, 4] - ref)) <= 1e-9 * np.max(np.abs(ref))
@@ -56,7 +57,7 @@ def test_each_seed_is_deterministic_and_scaled_to_its_pga():
         assert a.load.pga == pytest.approx(a.labels["intensity"] * 9.80665, rel=1e-12)
     seeds = {ld.labels["seed"]: ld.load.accel for ld in first if ld.labels["intensity"] == 0.1}
     assert not np.allclose(seeds[0], seeds[1])
-    w1, w2 = (LP.wind_loads(CFG, LP.make_building(CFG, "s3_T0.5"))[0].load.values for _ in range(2))
+    w1, w2 = (LP.wind_loads(CFG, buildings.make_building(CFG, "s3_T0.5"))[0].load.values for _ in range(2))
     np.testing.assert_array_equal(w1, w2)
 
 
@@ -96,7 +97,7 @@ def test_the_best_damper_is_the_lowest_ratio_and_verdicts_count_every_run(study)
     verdicts = LT.verdict_table(out)
     assert (verdicts["helps"] + verdicts["does_nothing"] + verdicts["makes_worse"] == verdicts["cases"]).all()
     records = verdicts[(verdicts["load"] == "records") & (verdicts["measure"] == "peak_roof")]
-    assert set(records["cases"]) == {len(LP.buildings(CFG)) * 2}   # buildings x PGAs x one record
+    assert set(records["cases"]) == {len(buildings.buildings(CFG)) * 2}   # buildings x PGAs x one record
     assert set(verdicts["load"]) == {"records", "kanai-tajimi firm", "wind"}
 
 

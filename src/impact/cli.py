@@ -18,6 +18,7 @@ from pathlib import Path
 
 from impact import __version__
 from impact.closed_form.pushover import PATTERNS as PUSHOVER_PATTERNS
+from impact.closed_form.tmd import tuned_for
 from impact.model.kinds import KINDS, DamperKind
 from impact.model.params import IMPACT_KINDS, MAX_TUNING, STARTS, ParameterError, Protocol, System, ipc_label
 from impact.model.scene import DAMPER_KINDS, Damper, GroundMotion, Scene, paper_scene_from_system
@@ -256,9 +257,7 @@ def _quake_damper(args, flags: dict, total_mass: float):
 
 def _tmd_design(args, flags: dict, building) -> dict:
     """A TMD's flags with its tuning and damping, where not given, from the study's design for the building."""
-    from impact.stages.loads.plan import tmd_damper
-
-    design = tmd_damper(building, flags["mu"])
+    design = tuned_for(building, flags["mu"])
     return flags | {flag: getattr(design, flag) for flag in TMD_DESIGNED if getattr(args, flag) is None}
 
 

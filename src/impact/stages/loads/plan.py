@@ -1,16 +1,17 @@
-"""The earthquake and wind study's plan: its buildings, dampers and loads, from the configuration.
+"""The earthquake and wind study's plan: its loads and their checks, from the configuration (its buildings and
+dampers are the shared ones of stages/buildings.py).
 Nothing here runs the engine, so the workflow's start-up reads it without loading numba."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from impact.closed_form.tmd import den_hartog
 from impact.model.building import Building
 from impact.model.params import G_GRAV, ParameterError
 from impact.model.records import kanai_tajimi, narrow_band_force
-from impact.model.scene import Damper, ForceRecord, GroundMotion
+from impact.model.scene import ForceRecord, GroundMotion
 from impact.model.suites import record_by_key
+from impact.stages.buildings import buildings
 
 FAMILIES = ("records", "kanai_tajimi", "wind")
 
@@ -24,38 +25,6 @@ IMPACT_RECORDS = 50_000   # impacts whose momentum is kept per run (more are cou
 
 
 SAME = 0.05               # a ratio within 5 % of 1: the damper "does nothing"
-
-
-def building_id(storeys: int, period_s: float) -> str:
-    return f"s{int(storeys)}_T{period_s:g}"
-
-
-def buildings(cfg: dict) -> dict:
-    """id -> (storeys, period) of every building of the stage."""
-    return {building_id(n, t): (n, t) for n in cfg["storeys"] for t in cfg["periods_s"]}
-
-
-def make_building(cfg: dict, building: str) -> Building:
-    storeys, period = buildings(cfg)[building]
-    return Building.uniform(storeys, period, cfg["zeta"])
-
-
-def first_modal_mass(building: Building) -> float:
-    """The first mode's modal mass with the mode shape scaled to 1 at the roof."""
-    _, phi = building.modes()
-    shape = phi[:, 0] / phi[-1, 0]
-    return float(shape @ (building.masses * shape))
-
-
-def tmd_damper(building: Building, mass_ratio: float) -> Damper:
-    """A TMD of mass_ratio x the building's mass on the roof, Den Hartog-tuned to the first mode."""
-    mass = mass_ratio * building.total_mass
-    tuning = den_hartog(mass / first_modal_mass(building))
-    return Damper("tmd", mass=mass, tuning=tuning["f"], damping=tuning["beta_t"])
-
-
-def impact_damper(kind: str, building: Building, mass_ratio: float, gap: float, e: float) -> Damper:
-    return Damper(kind, mass=mass_ratio * building.total_mass, gap=gap, e=e, tuning=1.0 if kind == "pid" else 0.0)
 
 
 @dataclass(frozen=True)

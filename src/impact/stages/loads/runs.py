@@ -8,21 +8,15 @@ import math
 import numpy as np
 import xarray as xr
 
+from impact.closed_form.tmd import tuned_for
 from impact.engine.run import simulate
 from impact.model.building import Building
 from impact.model.scene import Damper, GroundMotion, Scene
 from impact.model.suites import record_by_key
 from impact.outputs.datasets import time_history_dataset
 from impact.outputs.labels import label
-from impact.stages.loads.plan import (
-    IMPACT_RECORDS,
-    RESPONSES,
-    Load,
-    impact_damper,
-    make_building,
-    stage_loads,
-    tmd_damper,
-)
+from impact.stages.buildings import impact_damper, make_building
+from impact.stages.loads.plan import IMPACT_RECORDS, RESPONSES, Load, stage_loads
 from impact.stages.loads.tables import (
     LABEL_DIMS,
     MEASURES,
@@ -81,7 +75,7 @@ def damper_runs(cfg: dict, building_name: str, kind: str, bare: xr.Dataset) -> x
     rows = []
     for mr in cfg["mass_ratios"]:
         if kind == "tmd":
-            rows += [row(ld, run(building, (tmd_damper(building, mr),), ld), mass_ratio=mr) for ld in loads]
+            rows += [row(ld, run(building, (tuned_for(building, mr),), ld), mass_ratio=mr) for ld in loads]
             continue
         swept = [ld for ld in loads if ld.family != "kanai_tajimi"]
         sweep_rows = [row(ld, run(building, (_impact(cfg, kind, building, mr, g, bare, ld),), ld), mass_ratio=mr,
