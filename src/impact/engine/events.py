@@ -28,6 +28,8 @@ PEAK_RTOL = 1e-12  # the peak search stops refining an interval within this of t
 PEAK_MAX_VISITS = 100000  # a function of pure round-off could split forever: give up, and say so
 PEAK_VISITS_PER_EXTREMUM = 64  # ... but not before a long segment of a fast mode had this many visits per extremum
 PEAK_NOISE = 64 * _EPS  # the round-off of evaluating a row, relative to the sum of its terms' sizes
+TAYLOR_TURNS = 8.0  # the fastest mode's turn over a segment (radians) up to which its series bounds it ...
+TAYLOR_ORDERS = 80  # ... in this many terms at most (_taylor_bound)
 _FINISHED, _GAVE_UP, _STACK_FULL = 0, 1, 2  # how a peak search ended
 
 
@@ -407,6 +409,53 @@ def _unsearched_bound(kap, c, p, stack, top, m2):
 
 
 @njit(cache=True)
+def _taylor_bound(kap, c, p, big_t):
+    """A bound of |h| over [0, T] from its Taylor series at 0 (inf where the fastest mode turns by more than
+    TAYLOR_TURNS radians over T, and the series would need too many terms).
+
+    Each coefficient is summed over the terms and the polynomial before its size is taken, so terms that cancel
+    (the absolute acceleration of a floor at rest, written as a relative and a ground part of metres per second
+    squared each) bound it by what is left and by the coefficient's round-off, not by their own sizes, as the
+    curvature bounds of the branch and bound do.  The series stops where what is left of it, the terms' sizes
+    |c_k| (|kap_k| T)^n / n! summed (each a geometric tail once n passes |kap_k| T), is below their round-off."""
+    nk = kap.shape[0]
+    fastest = 0.0
+    size = 0.0
+    for k in range(nk):
+        fastest = max(fastest, abs(kap[k]))
+        size += abs(c[k])
+    x = fastest * big_t
+    if x > TAYLOR_TURNS:
+        return np.inf
+    ck = c.copy()
+    bound = 0.0
+    power = 1.0  # T^n / n!
+    factorial = 1.0  # n!
+    for n in range(TAYLOR_ORDERS):
+        coef = 0.0
+        terms = 0.0
+        for k in range(nk):
+            coef += ck[k].real
+            terms += abs(ck[k])
+            ck[k] *= kap[k]
+        if n < 4:
+            coef += factorial * p[n]
+            terms += factorial * abs(p[n])
+        bound += (abs(coef) + (PEAK_NOISE + (n + nk) * _EPS) * terms) * power
+        power *= big_t / (n + 1)
+        factorial *= n + 1
+        if n + 1 > 2.0 * x:
+            # the rest: sum over n' > n of |c_k| |kap_k|^n' T^n' / n!' <= (next term) / (1 - x / (n + 2))
+            rest = 0.0
+            for k in range(nk):
+                rest += abs(ck[k])
+            rest *= power * 2.0
+            if rest <= _EPS * size:
+                return bound + rest
+    return np.inf
+
+
+@njit(cache=True)
 def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
     """max(peak, max |h| over [0, T]), certified to PEAK_RTOL (see _peak_search); stack: (n, 4) work array.
 
@@ -476,6 +525,8 @@ def _peak_search(kap, kpow, ek, c, p, big_t, peak, stack):
                 visits = 0
             elif _unsearched_bound(kap, c, p, stack, top, m2) <= peak * (1.0 + PEAK_RTOL) + slack:
                 return peak, at, _FINISHED  # what is left unsearched exceeds the peak by at most its bound
+            elif _taylor_bound(kap, c, p, big_t) <= peak * (1.0 + PEAK_RTOL) + slack:
+                return peak, at, _FINISHED  # the whole segment is bounded by its series, to the same slack
             else:
                 return peak, at, _GAVE_UP
         top -= 1
