@@ -22,8 +22,7 @@ class DamperKind:
     spring    its mass hangs on a spring tuned to the building (tuning applies; else tuning is ignored)
     dashpot   its spring has a dashpot (damping applies)
     slides    its mass rests on its floor and may slide there (Coulomb friction nu applies)
-    paper     the paper's own system (impact.model.params.System): a one-unit damper of this kind alone on a
-              one-storey building under a harmonic force runs in the paper's loop
+    paper     the paper's loop runs it (a one-unit damper alone on the paper's structure: model.params.System)
     tuning_flag  the command line's name of its spring's tuning (the paper's r' for a pendulum)
     """
 
