@@ -35,11 +35,6 @@ class DamperKind:
     paper: bool
     tuning_flag: str = "tuning"
 
-    @property
-    def linear(self) -> bool:
-        """Without walls a damper is linear: closed forms and the linear engine apply."""
-        return not self.walls
-
 
 #: every kind, by name, in the order the study lists them
 KINDS: dict[str, DamperKind] = {
