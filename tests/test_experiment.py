@@ -13,7 +13,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from impact.stages.validation.analysis import (
+from impact.outputs.measurements import (
+    MeasurementError,
+    load_measurement,
+    load_measurements,
+    make_measurement,
+    write_measurement,
+)
+from impact.outputs.signals import (
     ASSUMED_SENSOR_NOISE_MM,
     UnresolvedPeakError,
     beta_to_delta,
@@ -29,13 +36,6 @@ from impact.stages.validation.analysis import (
     restitution_from_drop,
     steady_amplitude,
     sweep_curve,
-)
-from impact.stages.validation.measurements import (
-    MeasurementError,
-    load_measurement,
-    load_measurements,
-    make_measurement,
-    write_measurement,
 )
 
 F_STRUCT = 1.5  # Hz, the paper's rig

@@ -1,4 +1,4 @@
-"""The virtual rig (impact.stages.validation.rig): each test compares with an independent reference."""
+"""The virtual rig (impact.rig.simulator): each test compares with an independent reference."""
 
 from __future__ import annotations
 
@@ -8,11 +8,12 @@ import numpy as np
 import pytest
 from scipy import integrate
 
+from impact.outputs.measurements import load_measurement, write_measurement
+from impact.outputs.signals import drop_test_restitution, restitution_from_drop
+from impact.rig import config as RC
+from impact.rig import simulator as R
 from impact.stages.validation import grid as G
 from impact.stages.validation import paper_model as M
-from impact.stages.validation import rig as R
-from impact.stages.validation.analysis import drop_test_restitution, restitution_from_drop
-from impact.stages.validation.measurements import load_measurement, write_measurement
 
 WALLS = ["steel", "rubber_1.0mm", "rubber_0.5mm", "cork_3.0mm"]
 
@@ -82,7 +83,7 @@ def _linear_reference(spec: R.RigSpec, r: float, ts: np.ndarray) -> np.ndarray:
 
 def test_tiny_amplitudes_point_mass_rig_matches_eq4_model():
     """Small angles, no contact, point mass: the nonlinear rig reduces to Eq. (4) exactly."""
-    cfg = G.validation_config({"excitation": {"force_ratio_mm": 1e-4}})
+    cfg = RC.validation_config({"excitation": {"force_ratio_mm": 1e-4}})
     case = G.Case(0.0252, 40.0, 1.0, "steel")
     spec = R.rig_spec(cfg, mu=case.mu, gap_mm=case.gap_mm, rp=case.rp, wall=case.wall,
                       finite_radius=False, sensor=False)
@@ -98,7 +99,7 @@ def test_tiny_amplitudes_point_mass_rig_matches_eq4_model():
 
 
 def test_tiny_amplitudes_compound_pendulum_matches_its_linearisation():
-    cfg = G.validation_config({"excitation": {"force_ratio_mm": 1e-4}})
+    cfg = RC.validation_config({"excitation": {"force_ratio_mm": 1e-4}})
     spec = R.rig_spec(cfg, mu=0.0252, gap_mm=40.0, rp=0.9, wall="steel", sensor=False)
     assert spec.I_c > 0 and spec.pendulum_hz == pytest.approx(0.9 * 1.5, rel=1e-12)
     ts = np.arange(0, 2001) / 100.0

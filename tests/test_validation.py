@@ -10,12 +10,13 @@ import pytest
 
 from impact.engine.paper import simulate
 from impact.model.params import Protocol
+from impact.outputs.measurements import load_measurements
+from impact.outputs.signals import sweep_curve
+from impact.rig import config as RC
+from impact.rig import simulator as R
 from impact.stages.validation import comparison as C
 from impact.stages.validation import grid as G
 from impact.stages.validation import paper_model as M
-from impact.stages.validation import rig as R
-from impact.stages.validation.analysis import sweep_curve
-from impact.stages.validation.measurements import load_measurements
 from impact.stages.validation.standalone import run_validation
 
 # a short protocol: the tests check the machinery, not the paper's numbers
@@ -34,7 +35,7 @@ IMPACTING = G.Case(0.0054, 20.0, 1.0, "cork_3.0mm")  # regular 2 impacts per cyc
 @pytest.fixture(scope="module")
 def cfg():
     R.warm_up()
-    return G.validation_config(SHORT)
+    return RC.validation_config(SHORT)
 
 
 def test_grid_has_the_papers_108_cases():
@@ -127,17 +128,17 @@ def test_run_validation_smoke_writes_everything(cfg, tmp_path):
     assert claims["beta_half_power"]["half_power"]["paper_grid"]["rig"]["resolved"] is False
     recs = load_measurements(tmp_path / "records")
     assert recs and all(r.synthetic for r in recs)
-    assert {r.header["source"].split(":")[0] for r in recs} >= {"model", "virtual rig (impact.stages.validation.rig)"}
+    assert {r.header["source"].split(":")[0] for r in recs} >= {"model", "virtual rig (impact.rig.simulator)"}
     assert not list(tmp_path.rglob("*.tmp"))
 
 
 def test_config_is_checked_and_the_shipped_yaml_matches_the_defaults():
     with pytest.raises(ValueError, match="unknown key"):
-        G.validation_config({"protocl": {}})
+        RC.validation_config({"protocl": {}})
     with pytest.raises(ValueError, match="sensor"):
-        G.validation_config({"sensor": {"nosie_mm": 0.1}})
+        RC.validation_config({"sensor": {"nosie_mm": 0.1}})
     with pytest.raises(ValueError, match="grid wall"):
-        G.validation_config({"grid": {"walls": ["glass"]}})
+        RC.validation_config({"grid": {"walls": ["glass"]}})
     from pathlib import Path
 
     import yaml
@@ -145,25 +146,25 @@ def test_config_is_checked_and_the_shipped_yaml_matches_the_defaults():
     path = Path(__file__).resolve().parents[1] / "config" / "validation.yaml"
     if not path.exists():
         pytest.skip("config/validation.yaml not present")
-    cfg = G.validation_config(yaml.safe_load(path.read_text()))
+    cfg = RC.validation_config(yaml.safe_load(path.read_text()))
     assert cfg["grid"] and len(G.all_cases(cfg)) == 108
 
 
 def test_a_filled_configuration_is_a_fresh_copy_every_call():
     """validation_config fills a configuration once per process; what it hands out must not be shared."""
     given = {"excitation": {"force_ratio_mm": 1e-4}}
-    first = G.validation_config(given)
+    first = RC.validation_config(given)
     first["excitation"]["force_ratio_mm"] = 7.0
     first["grid"].clear()
-    second = G.validation_config(given)
+    second = RC.validation_config(given)
     assert second["excitation"]["force_ratio_mm"] == 1e-4 and second["grid"]
     assert given == {"excitation": {"force_ratio_mm": 1e-4}}  # the input is not filled in place
     # a value JSON cannot carry unchanged (a tuple) is validated as given, not as its JSON list
     with pytest.raises(ValueError, match="grid"):
-        G.validation_config({"grid": {"walls": ("glass",)}})
+        RC.validation_config({"grid": {"walls": ("glass",)}})
     for _ in range(2):  # a bad configuration is refused every time, not only the first
         with pytest.raises(ValueError, match="unknown key"):
-            G.validation_config({"protocl": {}})
+            RC.validation_config({"protocl": {}})
 
 
 def test_the_workflow_runs_one_job_per_wall_and_refuses_cases_that_are_not_a_grid():
@@ -171,7 +172,7 @@ def test_the_workflow_runs_one_job_per_wall_and_refuses_cases_that_are_not_a_gri
     subset must be one too, and a list that is not is refused naming what is missing."""
     walls, setups = G.batches(G.all_cases(None))
     assert len(walls) == 4 and len(setups) == 27
-    assert G.batches(G.study_cases(G.validation_config(None, smoke=True), smoke=True)) == (
+    assert G.batches(G.study_cases(RC.validation_config(None, smoke=True), smoke=True)) == (
         ["steel", "cork_3.0mm"], ["mu0.0252_d20_rp1"])
     with pytest.raises(ValueError, match="missing mu0.0054_d40_rp0.9_steel"):
         G.batches([G.Case(0.0252, 20.0, 1.0, "steel"), G.Case(0.0054, 40.0, 0.9, "cork_3.0mm")])

@@ -554,7 +554,7 @@ def cmd_compile(args) -> dict:
 
     from impact.engine.paper import ensure_compiled
     from impact.engine.scenes import compile_scene_loops
-    from impact.stages.validation.rig import warm_up
+    from impact.rig.simulator import warm_up
 
     start = time.perf_counter()
     compile_scene_loops()

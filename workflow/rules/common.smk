@@ -12,9 +12,10 @@ from impact.stages import tables as comparison
 from impact.outputs.archive import archive_name
 from impact.outputs.code_deps import library_digest
 from impact.outputs.labels import label
-from impact.stages.validation.grid import SCHEMA_PATH as RIG_SCHEMA
+from impact.rig.config import SCHEMA_PATH as RIG_SCHEMA
+from impact.rig.config import validation_config
 from impact.stages.validation.grid import batches as rig_batches
-from impact.stages.validation.grid import study_cases, validation_config
+from impact.stages.validation.grid import study_cases
 from impact.stages.numerics.plan import stability_families, work_precision_pieces
 from impact.outputs.provenance import git_state
 from impact.stages.loads import plan as loads

@@ -7,7 +7,9 @@ paper loop (paper_loop.py, which shares the contact search of events.py) would
 load stale code.  A stamp of the engine's sources, kept beside each cache,
 catches that and drops the cached kernels of that folder once.
 
-:func:`compile_lock` serialises compiling and loading across processes.
+:func:`compile_lock` serialises compiling and loading across processes, and is
+where a stale cache is dropped: every call of a cached kernel goes through it
+the first time in a process, and nothing is deleted merely by importing.
 """
 
 from __future__ import annotations
@@ -22,12 +24,12 @@ from pathlib import Path
 import filelock
 
 CORE = Path(__file__).parent
-# the stamp of the engine's cache folder: both loops cache there, so they share one stamp (with one each, the
-# second loop to load after an edit would purge what the first had just compiled)
-ENGINE_CACHE = "impact-engine"
+# the stamp's name in a cache folder: one per folder, so two loops caching in one folder share it (with one
+# each, the second loop to load after an edit would purge what the first had just compiled)
+STAMP = "impact-sources"
 
 
-@functools.cache  # three modules purge at import; the sources are read once per process
+@functools.cache  # every compile_lock reads it; the sources are read once per process
 def sources_digest() -> str:
     digest = hashlib.sha256()
     for src in sorted(CORE.glob("*.py")):
@@ -35,23 +37,24 @@ def sources_digest() -> str:
     return digest.hexdigest()[:16]
 
 
-def purge_stale_cache(dispatcher, name: str) -> None:
-    """Drop the cached kernels beside `dispatcher`'s cache when the core's sources changed."""
+def purge_stale_cache(dispatcher) -> None:
+    """Drop the cached kernels beside `dispatcher`'s cache when the core's sources changed.
+
+    Called under :func:`compile_lock` (which serialises it across processes), before the dispatcher loads.
+    """
     if not hasattr(dispatcher, "_cache"):
         return  # NUMBA_DISABLE_JIT: plain Python functions, nothing cached
     folder = Path(dispatcher._cache._cache_path)
-    stamp = folder / f"{name}-{sources_digest()}.stamp"
+    stamp = folder / f"{STAMP}-{sources_digest()}.stamp"
     try:
         if stamp.exists():
             return
         folder.mkdir(parents=True, exist_ok=True)
-        with filelock.FileLock(folder / f"{name}.lock"):
-            if not stamp.exists():
-                for old in folder.iterdir():
-                    stale_stamp = old.suffix == ".stamp" and old.name.startswith((name, "compiled-"))
-                    if old.suffix in (".nbi", ".nbc") or stale_stamp:
-                        old.unlink(missing_ok=True)
-                stamp.touch()
+        for old in folder.iterdir():
+            stale_stamp = old.suffix == ".stamp" and old.name.startswith(("impact-", "compiled-"))
+            if old.suffix in (".nbi", ".nbc") or stale_stamp:
+                old.unlink(missing_ok=True)
+        stamp.touch()
     except OSError:
         pass  # a read-only cache: numba compiles in memory instead
 
@@ -61,7 +64,7 @@ def _cache_dir() -> Path:
 
 
 @contextlib.contextmanager
-def compile_lock(what: str | None = None, label: str = ""):
+def compile_lock(what: str | None = None, label: str = "", fresh=()):
     """Exclusive lock on the numba cache folder while kernels compile or load.
 
     Processes starting together (parallel Snakemake or SLURM jobs) never write
@@ -72,12 +75,16 @@ def compile_lock(what: str | None = None, label: str = ""):
     what: a short name of the kernels the block compiles or loads (safe in a
     file name), label: what a person reads.  The first time they compile for
     these sources, one line on stderr says so, since it takes a minute or two
-    and happens once: later processes load them from the cache.
+    and happens once: later processes load them from the cache.  fresh: the
+    dispatchers the block calls, whose caches are dropped first if the
+    engine's sources changed since they were written.
     """
     folder = _cache_dir()
     folder.mkdir(parents=True, exist_ok=True)
     stamp = folder / f"compiled-{what}-{sources_digest()}.stamp" if what else None
     with filelock.FileLock(folder / "impact-jit.lock"):
+        for dispatcher in fresh:
+            purge_stale_cache(dispatcher)
         if stamp is not None and not stamp.exists():
             print(f"impact: compiling {label or what} (once: later runs load it from {folder}; this takes a minute "
                   "or two)", file=sys.stderr, flush=True)

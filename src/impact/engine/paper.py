@@ -32,7 +32,7 @@ def ensure_compiled(kind: str, friction: bool = False) -> None:
     if key in _WARM:
         return
     label = f"the engine's paper loop for the {kind.upper()}" + (" with friction" if friction else "")
-    with compile_lock(f"paper-{kind}-{int(friction)}", label):
+    with compile_lock(f"paper-{kind}-{int(friction)}", label, fresh=(K.run,)):
         probe = System(kind, mu=0.01, beta=0.05, e=0.5, gap=1.0, rp=1.0 if KINDS[kind].spring else 0.0,
                        nu=0.1 if friction else 0.0)
         _run_kernel(probe, 0.9, Protocol(periods=1.0, average_from=0.5), np.zeros(4), FREE_FLIGHT, 1)

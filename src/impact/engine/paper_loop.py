@@ -46,7 +46,6 @@ from numba import njit
 from impact.engine import layout as L
 from impact.engine.contact import event_cap_reached, floor_decision, plastic_end, stays
 from impact.engine.events import first_exit
-from impact.engine.jitcache import ENGINE_CACHE, purge_stale_cache
 from impact.engine.segment import bound_tab, deriv_at0, kappa_powers
 
 NT = 7  # coefficient slots, see module docstring
@@ -628,5 +627,3 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
         z_out[i] = z[i]
     return encode_contact(mode, side, sigma)
 
-
-purge_stale_cache(run, ENGINE_CACHE)

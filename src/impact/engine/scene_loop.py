@@ -57,7 +57,6 @@ from impact.engine.contact import (
     stuck_row,
 )
 from impact.engine.events import PEAK_RTOL, first_exit, peak_abs
-from impact.engine.jitcache import ENGINE_CACHE, purge_stale_cache
 from impact.engine.layout import (
     BRANCH_ELASTIC,
     D_CAP,
@@ -1411,5 +1410,3 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
         out.v[i] = v[i]
     return int(diag[D_NREC])
 
-
-purge_stale_cache(run_scene, ENGINE_CACHE)

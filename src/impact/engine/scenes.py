@@ -298,7 +298,7 @@ def simulate_scene(scene: Scene, *, record: int = 0, times=None) -> SceneResult:
     arrays = _scene_arrays(scene)
     key = _signature_key(arrays)
     if key not in _WARM:
-        with compile_lock(_kernel_name(key), _kernel_label(key)):
+        with compile_lock(_kernel_name(key), _kernel_label(key), fresh=(run_scene,)):
             out = run_arrays(arrays, record, times)
         _WARM.add(key)
     else:
@@ -306,7 +306,7 @@ def simulate_scene(scene: Scene, *, record: int = 0, times=None) -> SceneResult:
     return _result(scene, arrays, out)
 
 
-_WARM: set = set()
+_WARM: set = set()  # the loops' specialisations compiled (or loaded) in this process
 
 
 #: the optional parts of a scene, each compiled into its own specialisation of the loop when present

@@ -4,12 +4,12 @@ For every case of the paper's experimental grid (mu x d x r' x wall, 108
 cases) the **model** -- Eq. (4) as simulated by the production exact
 event-driven kernel (:mod:`impact.engine.paper` / :mod:`impact.engine.paper_loop`: linear
 pendulum, instantaneous Newton impacts, model units M = 1, omega = 1, lengths
-in mm) -- and the **virtual rig** (:mod:`impact.stages.validation.rig`: nonlinear
+in mm) -- and the **virtual rig** (:mod:`impact.rig.simulator`: nonlinear
 compound pendulum, finite ball, Hunt--Crossley contact calibrated to e, sensor
 range and noise) are run under the same protocol, both are written as records
 of the experiment data format (``synthetic: true``, with their provenance),
 and both go through the *same* analysis code
-(:mod:`impact.stages.validation.analysis`):
+(:mod:`impact.outputs.signals`):
 
 * forced sweep r = 0.9 ... 1.1 (step 0.01), each point from rest for 500
   natural periods, ``sweep_curve`` (sqrt(2) RMS over whole forcing periods of
@@ -43,8 +43,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from impact.stages.validation import rig as R
-from impact.stages.validation.analysis import (
+from impact.outputs.measurements import Measurement
+from impact.outputs.signals import (
     UnresolvedPeakError,
     beta_to_delta,
     count_impacts,
@@ -55,8 +55,9 @@ from impact.stages.validation.analysis import (
     sweep_curve,
     whole_periods,
 )
-from impact.stages.validation.grid import Case, frequency_values, merge, validation_config, wall_e
-from impact.stages.validation.measurements import Measurement
+from impact.rig import simulator as R
+from impact.rig.config import merge, validation_config
+from impact.stages.validation.grid import Case, frequency_values, wall_e
 from impact.stages.validation.paper_model import (
     model_bare_forced_point,
     model_bare_free_decay,

@@ -3,7 +3,7 @@ that simulate, so that a change of a figure's style reruns no simulation)."""
 
 from __future__ import annotations
 
-from impact.stages.validation.plotting import plot_fig3, plot_fig5, plot_histories
+from impact.outputs.validation_figures import plot_fig3, plot_fig5, plot_histories
 from impact.stages.validation.steps import read_fig3_data, read_fig5_data
 
 

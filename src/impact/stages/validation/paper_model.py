@@ -20,14 +20,15 @@ from numba import njit
 from impact.engine import layout as L
 from impact.engine import paper_loop as K
 from impact.engine.contact import STICK_VELOCITY
-from impact.engine.jitcache import compile_lock, purge_stale_cache
+from impact.engine.jitcache import compile_lock
 from impact.engine.paper import ensure_compiled, initial_state, pid_data
 from impact.engine.paper import param_vector as model_param_vector
 from impact.engine.sampler import paper_free_flight, paper_state
 from impact.model.params import Protocol, System
-from impact.stages.validation import rig as R
-from impact.stages.validation.grid import Case, validation_config, wall_e
-from impact.stages.validation.measurements import Measurement, make_measurement
+from impact.outputs.measurements import Measurement, make_measurement
+from impact.rig import simulator as R
+from impact.rig.config import validation_config
+from impact.stages.validation.grid import Case, wall_e
 
 # one call of the paper loop: its parameters, the PID's eigen-data, and where it writes (records, diagnostics,
 # the final state); and the sample times with the arrays they fill (x and the stroke s = y - x)
@@ -190,8 +191,13 @@ class ModelRun:
 
 def _run_model(cfg: dict, case: Case, r: float, ts_s: np.ndarray, *, forced: bool, x0_mm: float = 0.0,
                chunk: int | None = None) -> ModelRun:
+    warm_up_model()
+    return _sample_model(cfg, case, r, ts_s, forced=forced, x0_mm=x0_mm, chunk=chunk)
+
+
+def _sample_model(cfg: dict, case: Case, r: float, ts_s: np.ndarray, *, forced: bool, x0_mm: float = 0.0,
+                  chunk: int | None = None) -> ModelRun:
     system = model_system(cfg, case)
-    ensure_compiled("pid")
     omega = 2.0 * math.pi * float(cfg["structure"]["frequency_hz"])
     prot = Protocol(periods=1.0, average_from=0.0)
     p = model_param_vector(system, r, prot)
@@ -323,10 +329,7 @@ def warm_up_model():
         return
 
     ensure_compiled("pid")
-    with compile_lock("experiment-model", "the virtual rig's model sampler"):
+    with compile_lock("experiment-model", "the virtual rig's model sampler", fresh=(_model_samples,)):
         cfg = validation_config(None)
-        _run_model(cfg, Case(0.0129, 30.0, 1.0, "steel"), 1.0, np.array([0.0, 0.01]), forced=True)
+        _sample_model(cfg, Case(0.0129, 30.0, 1.0, "steel"), 1.0, np.array([0.0, 0.01]), forced=True)
     _WARM = True
-
-
-purge_stale_cache(_model_samples, "impact-experiment")

@@ -8,9 +8,10 @@ from pathlib import Path
 import pandas as pd
 
 from impact.outputs.files import write_text_atomic
+from impact.rig.config import validation_config
 from impact.stages.validation.comparison import _map, _run_case_worker, ablation, run_case
 from impact.stages.validation.figures import write_figures
-from impact.stages.validation.grid import Case, study_cases, validation_config
+from impact.stages.validation.grid import Case, study_cases
 from impact.stages.validation.steps import (
     FIG3_RECORDS,
     FIG5_RECORDS,

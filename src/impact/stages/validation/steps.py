@@ -20,6 +20,8 @@ import numpy as np
 import pandas as pd
 
 from impact.outputs.files import write_text_atomic
+from impact.outputs.measurements import Measurement, write_measurement
+from impact.rig.simulator import contact_calibrations, with_calibrations
 from impact.stages.validation.claims import evaluate_claims, jsonable
 from impact.stages.validation.comparison import (
     CaseResult,
@@ -29,8 +31,6 @@ from impact.stages.validation.comparison import (
     run_case,
 )
 from impact.stages.validation.grid import Case
-from impact.stages.validation.measurements import Measurement, write_measurement
-from impact.stages.validation.rig import contact_calibrations, with_calibrations
 
 # where each figure's records go, under the stage's records folder (one folder per panel)
 FIG3_RECORDS = ("fig3a", "fig3b_paper_grid", "fig3b_fine_grid")

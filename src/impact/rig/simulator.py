@@ -85,11 +85,11 @@ from numba import njit
 from scipy import integrate, optimize
 
 from impact.engine.jitcache import compile_lock
-from impact.stages.validation.grid import validation_config
-from impact.stages.validation.measurements import Measurement, make_measurement
+from impact.outputs.measurements import Measurement, make_measurement
+from impact.rig.config import validation_config
 
 G_STANDARD = 9.80665
-RIG_SOURCE = "virtual rig (impact.stages.validation.rig): synthetic, simulated -- not measured data"
+RIG_SOURCE = "virtual rig (impact.rig.simulator): synthetic, simulated -- not measured data"
 
 def merged_config(cfg: dict | None) -> dict[str, Any]:
     """``cfg`` with every default filled in from the rig's schema (:mod:`.grid`, ``rig.schema.yaml``)."""
@@ -1000,7 +1000,7 @@ def drop_test_record(cfg: dict | None, wall: str, mu: float, *, heights_cm=None,
     One row per drop (``heights_cm`` x ``repeats``); rebound heights from
     :func:`drop`, plus the configured reading noise.  The header's ``mu`` is
     m/M for a free target (``target: structure``) and 0 for a rigid one, so
-    that :func:`impact.stages.validation.analysis.drop_test_restitution` applies
+    that :func:`impact.outputs.signals.drop_test_restitution` applies
     Eq. (3b) consistently.  Penetrations beyond a lining's thickness (it would
     bottom out on the steel, which the rig does not model) are noted.
     """

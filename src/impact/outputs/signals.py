@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize, signal
 
-from impact.stages.validation.measurements import Measurement, MeasurementError
+from impact.outputs.measurements import Measurement, MeasurementError
 
 # Assumed rms noise of the optical displacement sensor.  The paper gives only
 # the sensor's range ("displacements of target up to 2 cm"), not its noise or
