@@ -29,7 +29,7 @@ def scenes():
     for name in ("elcentro", "northridge"):
         rec = load_record(name)
         for label, dampers in (("bare", ()), ("cid", (cid,))):
-            yield f"{name}/{label}", building, dampers, rec.scaled_to_pga(0.35) * G, rec.dt
+            yield f"{name}/{label}", building, dampers, rec.scaled_to_pga_g(0.35) * G, rec.dt
 
 
 def measures(building, dampers, accel, dt) -> dict:

@@ -355,6 +355,17 @@ def test_a_misspelt_key_is_named_in_a_few_lines(tmp_path):
     assert len(text.splitlines()) < 20, text
 
 
+def test_a_misspelt_key_of_the_rigs_file_is_named_in_a_few_lines(tmp_path):
+    rig = tmp_path / "rig.yaml"
+    rig.write_text("sensr: {noise_mm: 0.01}\n")
+    override = tmp_path / "override.yaml"
+    override.write_text(f"validation: {{config: {rig}, smoke: true}}\n")
+    proc = _snakemake(ROOT, "-n", "--configfile", "config/smoke.yaml", str(override), check=False)
+    text = proc.stdout + proc.stderr
+    assert proc.returncode != 0 and f"{rig} (top level)" in text and "'sensr' was unexpected" in text, text[-2000:]
+    assert len(text.splitlines()) < 20, text
+
+
 def test_lint_is_clean():
     proc = _snakemake(ROOT, "--lint")
     assert "Congratulations" in proc.stdout + proc.stderr

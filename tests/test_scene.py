@@ -258,7 +258,7 @@ def test_at2_reader_reads_header_and_values(tmp_path):
     path.write_text(AT2)
     rec = read_at2(path)
     assert rec.npts == 6 and rec.dt == 0.01 and rec.pga_g == pytest.approx(0.04)
-    np.testing.assert_allclose(rec.scaled_to_pga(0.2), np.array([1, 2, -3, 4, 0, 1]) * 0.05)
+    np.testing.assert_allclose(rec.scaled_to_pga_g(0.2), np.array([1, 2, -3, 4, 0, 1]) * 0.05)
 
 
 @pytest.mark.parametrize("units, one_in_g", [

@@ -262,10 +262,9 @@ def _tmd_design(args, flags: dict, building) -> dict:
 
 
 def _building(args):
-    """The uniform building of impact quake and impact pushover, yielding when --yield-drift-m is given."""
-    from impact.model.building import Building
-
-    building = Building.uniform(args.storeys, args.period_s, args.zeta, floor_mass=args.floor_mass_kg)
+    """The building of impact quake and impact pushover (uniform, or floor by floor), yielding when
+    --yield-drift-m is given."""
+    building = _elastic_building(args)
     if args.hardening is not None and args.yield_drift_m is None:
         raise ParameterError("--hardening needs --yield-drift-m (an elastic storey has no post-yield branch)")
     for flag, given in (("--p-delta", args.p_delta), ("--collapse-drift-ratio", args.collapse_drift_ratio)):
@@ -277,15 +276,51 @@ def _building(args):
                              p_delta=args.p_delta)
 
 
+#: the uniform building's flags and their defaults; --masses-kg with --storey-stiffness-n-per-m replace them
+UNIFORM_BUILDING = dict(storeys=1, period_s=1.0, floor_mass_kg=1.0e5)
+
+
+def _elastic_building(args):
+    from impact.model.building import Building
+
+    explicit = (args.masses_kg, args.storey_stiffness_n_per_m)
+    if explicit == (None, None):
+        uniform = {flag: default if getattr(args, flag) is None else getattr(args, flag)
+                   for flag, default in UNIFORM_BUILDING.items()}
+        return Building.uniform(uniform["storeys"], uniform["period_s"], args.zeta,
+                                floor_mass=uniform["floor_mass_kg"])
+    if None in explicit:
+        raise ParameterError("--masses-kg and --storey-stiffness-n-per-m go together: give both, floor 1 first")
+    given = [f"--{flag.replace('_', '-')}" for flag in UNIFORM_BUILDING if getattr(args, flag) is not None]
+    if given:
+        raise ParameterError(f"{', '.join(given)}: a building given floor by floor (--masses-kg) has its own")
+    return Building.explicit(args.masses_kg, args.storey_stiffness_n_per_m, zeta=args.zeta)
+
+
+def _numbers(text: str) -> list[float]:
+    """An argparse type: comma-separated numbers (their ranges are the model's to check, by name)."""
+    try:
+        return [float(x) for x in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: give numbers separated by commas, e.g. 2e5,2e5,1.5e5") from None
+
+
 def _building_flags(parser) -> None:
-    """The uniform building's flags (impact quake, impact pushover)."""
-    parser.add_argument("--storeys", type=_ranged(1, 200, kind=int), default=1, help="number of storeys, in [1, 200]")
-    parser.add_argument("--period-s", type=_ranged(0, 1e4, lo_open=True), default=1.0,
-                        help="fundamental period T1 in seconds, in (0, 1e4]")
+    """The building's flags (impact quake, impact pushover): uniform, or floor by floor."""
+    d = UNIFORM_BUILDING
+    parser.add_argument("--storeys", type=_ranged(1, 200, kind=int), default=None,
+                        help=f"number of storeys, in [1, 200] (default {d['storeys']})")
+    parser.add_argument("--period-s", type=_ranged(0, 1e4, lo_open=True), default=None,
+                        help=f"fundamental period T1 in seconds, in (0, 1e4] (default {d['period_s']:g})")
     parser.add_argument("--zeta", type=_ranged(0, 1, lo_open=True, hi_open=True), default=0.02,
                         help="modal damping ratio in every mode, in (0, 1)")
-    parser.add_argument("--floor-mass-kg", type=_ranged(0, 1e15, lo_open=True), default=1.0e5,
-                        help="mass of each floor in kg (only ratios matter to the response)")
+    parser.add_argument("--floor-mass-kg", type=_ranged(0, 1e15, lo_open=True), default=None,
+                        help=f"mass of each floor in kg (only ratios matter to the response) (default {d['floor_mass_kg']:g})")
+    parser.add_argument("--masses-kg", type=_numbers, default=None, metavar="M1,M2,...",
+                        help="a building floor by floor: each floor's mass in kg, floor 1 first (with "
+                             "--storey-stiffness-n-per-m, instead of --storeys, --period-s and --floor-mass-kg)")
+    parser.add_argument("--storey-stiffness-n-per-m", type=_numbers, default=None, metavar="K1,K2,...",
+                        help="each storey's lateral stiffness in N/m, storey 1 (the ground's) first (with --masses-kg)")
 
 
 def _yield_flags(parser, collapse: bool) -> None:
@@ -322,8 +357,9 @@ def cmd_quake(args) -> dict:
 
     record = _quake_record(args)
     building = _building(args)
-    if args.floor is not None and args.floor > args.storeys:
-        raise ParameterError(f"--floor = {args.floor} is out of range: allowed [1, --storeys = {args.storeys}]")
+    if args.floor is not None and args.floor > building.storeys:
+        raise ParameterError(f"--floor = {args.floor} is out of range: allowed [1, the building's {building.storeys} "
+                             "storeys]")
     flags = _quake_damper_flags(args)
     if args.damper == "tmd":
         flags = _tmd_design(args, flags, building)
@@ -335,21 +371,54 @@ def cmd_quake(args) -> dict:
     load = GroundMotion.from_record(record, pga_g=args.pga_g)
     scene = Scene(building, dampers, load, duration=args.duration_s, start=flags.get("start", "centre"),
                   collapse_drift_ratio=args.collapse_drift_ratio)
-    if args.plot and not dampers:
-        raise ParameterError(f"--plot draws a damper's strokes and impacts: give --damper {' or '.join(KINDS)}")
-    plotted = _plotted(scene, building.period1 / 50) if args.plot else {}
+    if (args.plot or args.compare_bare) and not dampers:
+        flag = "--plot draws a damper's strokes and impacts" if args.plot else "--compare-bare compares a damper"
+        raise ParameterError(f"{flag}: give --damper {' or '.join(KINDS)}")
+    plotted = _plotted(scene, building.period1 / 50) if args.plot or args.series else {}
     res = simulate(scene, **plotted)
+    bare = None
+    if args.plot or args.compare_bare:
+        bare = simulate(Scene(building, (), load, duration=args.duration_s, collapse_drift_ratio=args.collapse_drift_ratio),
+                        **({"measures": ("amplitude", "samples"), "times": plotted["times"]} if plotted else {}))
     if args.plot:
-        bare = simulate(Scene(building, (), load, duration=args.duration_s), measures=("samples",),
-                        times=plotted["times"])
         _plot(args.plot, scene, res, f"impact {' '.join(sys.argv[1:])}", "m", "N s",
               roof_bare=bare.samples["q"][:, building.storeys - 1])
+    if args.series:
+        _write_series(args.series, scene, res)
     out = {"record": {"name": record.name, "source": record.source, "dt_s": record.dt, "npts": record.npts,
                       "pga_g": load.pga / 9.80665, **({"metadata": record.metadata} if record.metadata else {})},
            "building": building.as_dict(), "damper": args.damper,
            "dampers": [dict(vars(d)) for d in dampers]}
     out.update(res.as_json("m"))
+    if args.compare_bare:
+        out["bare"] = {key: bare_value for key, bare_value in bare.as_json("m").items() if key in COMPARED}
+        out["ratio_to_bare"] = {key: out[key] / bare_value if bare_value else math.nan
+                                for key, bare_value in out["bare"].items()}
     return out
+
+
+#: what --compare-bare reports of the bare building, and as the ratio of the damped building's to it
+COMPARED = ("peak_roof_displacement_m", "rms_roof_displacement_m", "peak_roof_acceleration_ms2",
+            "peak_interstorey_drift_m")
+
+
+def _write_series(path: str, scene, res) -> None:
+    """The run's time series as CSV: each floor's displacement relative to the ground and each damper unit's
+    stroke relative to its floor, in metres, at the samples --plot draws."""
+    import pandas as pd
+
+    from impact.outputs.files import write_text_atomic
+
+    q, storeys = res.samples["q"], scene.building.storeys
+    columns = {"t_s": res.samples["t"]}
+    columns.update({f"floor{i + 1}_m": q[:, i] for i in range(storeys)})
+    unit = storeys
+    for d, damper in enumerate(scene.dampers, start=1):
+        floor = (damper.floor or storeys) - 1
+        for j in range(damper.units):
+            columns[f"damper{d}_unit{j + 1}_stroke_m"] = q[:, unit] - q[:, floor]
+            unit += 1
+    write_text_atomic(path, pd.DataFrame(columns).to_csv(index=False, float_format="%.9g"))
 
 
 def cmd_records(args) -> dict:
@@ -624,6 +693,12 @@ def build_parser() -> argparse.ArgumentParser:
                     help="simulated time in seconds (default: the record's length)")
     qk.add_argument("--plot", metavar="FILE", type=_new_file(*PLOT_SUFFIXES), default=None,
                     help=PLOT_HELP + "; with the bare building's roof")
+    qk.add_argument("--compare-bare", action="store_true",
+                    help="also run the building without its damper under the same load, and report its peaks and "
+                         "each damped peak over the bare one (ratio_to_bare)")
+    qk.add_argument("--series", metavar="FILE", type=_new_file(".csv"), default=None,
+                    help="also write the run's time series to FILE (.csv): each floor's displacement and each damper "
+                         "unit's stroke in metres, at the samples --plot draws")
     qk.add_argument("--json", action="store_true", help="print one JSON object (the only output format)")
     _yield_flags(qk, collapse=True)
     qk.set_defaults(func=cmd_quake)

@@ -30,8 +30,8 @@ from impact.stages.sweeps import all_curves, check_config, figure_curves, fricti
 from impact.model.params import curve_id
 
 
-def validate_naming_the_key(config, schema):
-    """The schema's check, with its error as one line naming the key and what is wrong (Snakemake's own
+def validate_naming_the_key(config, schema, what="config"):
+    """The schema's check of ``config`` (``what`` names it), with its error as one line naming the key and what is wrong (Snakemake's own
     message prints the whole schema after it: two thousand lines for a misspelt key)."""
     try:
         validate(config, schema)
@@ -42,7 +42,7 @@ def validate_naming_the_key(config, schema):
         where = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in error.absolute_path)
         about = error.schema.get("description") if isinstance(error.schema, dict) else None
         raise WorkflowError(
-            f"config {where.lstrip('.') or '(top level)'}: {error.message}"
+            f"{what} {where.lstrip('.') or '(top level)'}: {error.message}"
             + (f"\n  the key: {about}" if about and error.absolute_path else "")
         ) from None
 
@@ -125,7 +125,7 @@ RIG, RIG_CASES, RIG_WALLS, RIG_SETUPS = {}, {}, [], []
 if VALIDATION:
     with open(RIG_FILE) as fh:
         RIG = yaml.safe_load(fh) or {}
-    validate(RIG, str(RIG_SCHEMA))
+    validate_naming_the_key(RIG, str(RIG_SCHEMA), what=RIG_FILE)
     RIG = validation_config(RIG, smoke=VALIDATION.get("smoke", False))
     _cases = study_cases(RIG, VALIDATION.get("smoke", False))
     RIG_CASES = {c.id: dataclasses.asdict(c) for c in _cases}

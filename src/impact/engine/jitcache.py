@@ -86,9 +86,17 @@ def compile_lock(what: str | None = None, label: str = "", fresh=()):
         for dispatcher in fresh:
             purge_stale_cache(dispatcher)
         if stamp is not None and not stamp.exists():
-            print(f"impact: compiling {label or what} (once: later runs load it from {folder}; this takes a minute "
-                  "or two)", file=sys.stderr, flush=True)
+            _say(f"impact: compiling {label or what} (once: later runs load it from {folder}; this takes a minute "
+                 "or two)")
         yield
         if stamp is not None:
             with contextlib.suppress(OSError):  # a read-only cache: numba compiled in memory
                 stamp.touch()
+
+
+def _say(line: str) -> None:
+    """One line on stderr, and on the terminal too when a workflow job sends its stderr to its log file (a
+    first compile under Snakemake would otherwise be minutes of silence)."""
+    print(line, file=sys.stderr, flush=True)
+    if sys.stderr is not sys.__stderr__ and sys.__stderr__ is not None:
+        print(line, file=sys.__stderr__, flush=True)

@@ -77,10 +77,11 @@ class Record:
     def pga_g(self) -> float:
         return float(np.max(np.abs(self.accel_g)))
 
-    def scaled_to_pga(self, pga_g: float) -> np.ndarray:
-        """The record's samples scaled to a peak of ``pga_g``, **in g**, as the record holds them.  A
-        :class:`~impact.model.scene.GroundMotion` takes m/s²: build it with ``GroundMotion.from_record(record,
-        pga_g=...)``, which converts, rather than from these values."""
+    def scaled_to_pga_g(self, pga_g: float) -> np.ndarray:
+        """The record's samples scaled to a peak of ``pga_g``, **in g**, as the record holds them (the name
+        ends in ``_g`` as every value in g does).  A :class:`~impact.model.scene.GroundMotion` takes m/s²:
+        build it with ``GroundMotion.from_record(record, pga_g=...)``, which converts, rather than from these
+        values."""
         _check("pga_g", pga_g, 0.0, 10.0, lo_open=True)
         if not self.pga_g > 0.0:
             raise ParameterError(f"record {self.name!r} is zero at every sample: it cannot be scaled to pga_g = {pga_g}")

@@ -137,7 +137,7 @@ class GroundMotion:
     @classmethod
     def from_record(cls, record, pga_g: float | None = None, gravity: float = G_GRAV) -> "GroundMotion":
         """From a :class:`impact.model.records.Record` (values in g), optionally scaled to a PGA in g."""
-        accel_g = record.accel_g if pga_g is None else record.scaled_to_pga(pga_g)
+        accel_g = record.accel_g if pga_g is None else record.scaled_to_pga_g(pga_g)
         return cls(accel_g * gravity, record.dt, record.name)
 
     @property
