@@ -345,6 +345,16 @@ def test_invalid_config_fails_at_parse_time_naming_the_key(tmp_path, patch, key)
     assert "Job stats" not in text  # refused before any job was planned
 
 
+def test_the_papers_scope_writes_its_own_report_and_archive():
+    """make paper after make study must not replace the whole study's report with one that lacks its stages."""
+    paper = _snakemake(ROOT, "-n", "all", "archive", "--configfile", "config/config.yaml", "config/paper.yaml").stdout
+    study = _snakemake(ROOT, "-n", "all", "archive", "--configfile", "config/config.yaml").stdout
+    assert "results/report/paper.html" in paper and "results/report/index.html" not in paper
+    assert "results/report/index.html" in study and "paper.html" not in study
+    assert re.search(r"results/archive/impact-paper-\S+\.tar\.gz", paper)
+    assert re.search(r"results/archive/impact-study-\S+\.tar\.gz", study) and "impact-paper-" not in study
+
+
 def test_a_misspelt_key_is_named_in_a_few_lines(tmp_path):
     """Not the whole schema after it (two thousand lines): the key, what is wrong, where."""
     bad = tmp_path / "bad.yaml"

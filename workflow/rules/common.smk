@@ -98,12 +98,14 @@ def library(script):
     return library_digest(os.path.join(SCRIPTS, f"{script}.py"), LIBRARY_SRC)
 
 
-# one archive per commit, "-dirty" when the source tree has uncommitted changes
-ARCHIVE = f"results/archive/{archive_name(git_state()['git_commit'], git_state()['git_dirty'])}"
-
-
 # stages that run only when configured (and, for those beyond the paper, not skipped: config/paper.yaml)
 SKIPPED_STAGES = set(config.get("skip_stages", []))
+# a run that skips stages (make paper) writes a report and an archive of its own, so that it never replaces the
+# whole study's with a page that lacks the skipped stages' sections
+SCOPE = "paper" if SKIPPED_STAGES else "study"
+REPORT = "results/report/index.html" if SCOPE == "study" else f"results/report/{SCOPE}.html"
+# one archive per commit and scope, "-dirty" when the source tree has uncommitted changes
+ARCHIVE = f"results/archive/{archive_name(git_state()['git_commit'], git_state()['git_dirty'], scope=SCOPE)}"
 
 
 def stage_config(name):

@@ -11,7 +11,7 @@ rule report:
         template=os.path.join(REPORT_DIR, "index.html.j2"),
         benchmarks=lambda wildcards: study_benchmarks(),
     output:
-        "results/report/index.html",
+        REPORT,
     log:
         "results/logs/report.log",
     localrule: True

@@ -219,11 +219,12 @@ def _yaml(obj) -> str:
 # --------------------------------------------------------------------------- building
 
 
-def archive_name(commit: str, dirty: str | bool = "no") -> str:
-    """``impact-study-<commit>.tar.gz``; ``-dirty`` is added for a tree with uncommitted changes."""
+def archive_name(commit: str, dirty: str | bool = "no", scope: str = "study") -> str:
+    """``impact-<scope>-<commit>.tar.gz`` (scope: the whole study, or the paper's part of it alone); ``-dirty``
+    is added for a tree with uncommitted changes."""
     dirty = dirty if isinstance(dirty, bool) else str(dirty) == "yes"
     safe = "".join(c if c.isalnum() or c in "._-" else "_" for c in (commit or "unknown"))
-    return f"impact-study-{safe}{'-dirty' if dirty else ''}.tar.gz"
+    return f"impact-{scope}-{safe}{'-dirty' if dirty else ''}.tar.gz"
 
 
 def _epoch() -> int:
