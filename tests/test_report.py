@@ -201,7 +201,7 @@ def test_report_shows_every_given_section_from_the_files(results):
     # grouped by category, in the order of their numbered names; the registry's order within one
     assert ids == ["overview", "paper_vs_reproduced", "tmd_optimum", "fig08", "fig99", "masri_check",
                    "numerics_error_runtime", "provenance"]
-    assert re.findall(r"<h2>([^<]+)</h2>", page) == ["The study", "1. Paper", "2. Figures", "4. Masri",
+    assert re.findall(r"<h2>([^<]+)</h2>", page) == ["What it finds", "The study", "1. Paper", "2. Figures", "4. Masri",
                                                      "6. Numerics", "Provenance of this run"]
     # files that do not exist give no section
     assert 'id="cross_validation"' not in page and "Not built in this tree" not in page
@@ -436,6 +436,20 @@ def test_long_tables_fold(tmp_path, results):
     assert f"{report.LONG_TABLE + 1} rows; ok: 40 of 61 yes" in page
 
 
+def test_the_page_states_its_findings_first(tmp_path):
+    """A new user found a long table of contents at the top and no finding: the tables that conclude something
+    (against the paper, which damper is best) are listed first, each with its conclusion and a link."""
+    _csv(tmp_path / "loads_best_damper.csv", ["building", "best"],
+         [["s1_T0.5", "tmd"], ["s3_T1", "tmd"], ["s5_T2", "pid"]])
+    _csv(tmp_path / "plain.csv", ["i", "x"], [["1", "2"]])
+    sections = [{"path": str(tmp_path / name), "title": title, "category": "1", "caption_html": ""}
+                for name, title in (("plain.csv", "Plain"), ("loads_best_damper.csv", "Best damper"))]
+    page, _ = report.render_report(sections, None, TEMPLATE)
+    top = page[: page.index('<nav aria-label="Contents">')]
+    assert '<a href="#loads_best_damper">Best damper</a>: The best: TMD in 2 of 3 rows, PID in 1.' in top
+    assert "Plain" not in top
+
+
 # --------------------------------------------------------------------------- words for identifiers
 
 
@@ -448,11 +462,21 @@ def test_long_tables_fold(tmp_path, results):
     ("pid_rp1_centre", "PID r' = 1, centre start"), ("cid_left", "CID, left start"),
     ("ivp_RK45", "solve_ivp RK45"), ("moreau_jean", "Moreau–Jean time stepping"), ("tmd", "TMD"),
     ("cid_2eipc", "CID on its 2-EIPC orbit (g = 1.6, left start)"), ("a plain phrase", "a plain phrase"),
+    ("peak_roof", "peak roof displacement"), ("peak_drift", "peak inter-storey drift"),
 ])
 def test_identifiers_are_shown_as_words(identifier, words):
     from impact.outputs.labels import label
 
     assert label(identifier) == words
+
+
+def test_a_loads_run_is_named_in_words_with_its_pga_unit():
+    """Not 'building s5_T0.5, record elcentro, intensity 0.5' (a new user's finding): words, and the PGA in g."""
+    from impact.outputs.labels import load_case
+
+    assert load_case({"building": "s5_T0.5", "record": "elcentro", "intensity": 0.5}) == (
+        "5 storeys, T1 = 0.5 s, record elcentro, PGA 0.5 g")
+    assert load_case({"building": "s5_T2", "wind_seed": 3}) == "5 storeys, T1 = 2 s, wind seed 3"
 
 
 def test_a_table_shows_words_numbers_and_dashes_keeping_the_files_text(tmp_path):

@@ -31,6 +31,10 @@ RUN_MEASURES = {
 
 DAMPERS = {"cid": "CID", "pid": "PID", "tmd": "TMD", "bare": "bare", "none": "bare"}
 
+#: the measures the loads stage compares with the bare building
+LOAD_MEASURES = {"peak_roof": "peak roof displacement", "rms_roof": "RMS roof displacement",
+                 "peak_accel": "peak absolute roof acceleration", "peak_drift": "peak inter-storey drift"}
+
 #: the numerics stage's methods and cases (stages/numerics/plan.py)
 METHODS = {"core": "exact core", "rk4": "RK4, fixed step", "moreau_jean": "Moreau–Jean time stepping",
            "penalty": "penalty contact (Radau)"}
@@ -47,7 +51,7 @@ COLUMNS = {
     "sa_g": "Sa(T1) (g)", "mass_ratio": "mass ratio", "median_reduction": "median reduction",
     "reduction_low": "reduction, 5 %", "reduction_high": "reduction, 95 %", "share_lowered": "share helped",
     "share_raised": "share harmed", "theta_sa_g": "median capacity θ (g)", "drift_limit": "drift limit",
-    "pga_g": "PGA (g)", "intensity": "PGA (g)",
+    "pga_g": "PGA (g)", "intensity": "PGA (g)", "intensity_g": "PGA (g)",
 }
 
 _NUMBER = r"-?[0-9.]+(?:e-?[0-9]+)?"
@@ -93,7 +97,7 @@ _PATTERNS = ((_CURVE, _curve), (_BUILDING, _building), (_RIG_CASE, _rig_case), (
 def label(identifier) -> str:
     """Words for an identifier the study makes; anything else as it is."""
     text = str(identifier)
-    for table in (DAMPERS, METHODS, NUMERICS_CASES):
+    for table in (DAMPERS, METHODS, NUMERICS_CASES, LOAD_MEASURES):
         if text in table:
             return table[text]
     for pattern, words in _PATTERNS:
@@ -101,6 +105,13 @@ def label(identifier) -> str:
         if m:
             return words(m)
     return text
+
+
+def load_case(coordinates: dict) -> str:
+    """One run of the loads stage in words, from its coordinates: its building, its load and its PGA."""
+    words = {"building": label, "intensity": lambda v: f"PGA {float(v):g} g", "record": lambda v: f"record {v}",
+             "seed": lambda v: f"seed {v}", "wind_seed": lambda v: f"wind seed {v}", "soil": lambda v: f"{v} soil"}
+    return ", ".join(words.get(dim, lambda v, d=dim: f"{d} {v}")(value) for dim, value in coordinates.items())
 
 
 def column_label(column: str) -> str:

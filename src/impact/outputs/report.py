@@ -21,6 +21,7 @@ them in the form the workflow's registry gives (``report_sections()`` in targets
 from __future__ import annotations
 
 import base64
+import collections
 import csv
 import hashlib
 import io
@@ -281,6 +282,18 @@ def _comparison_summary(columns, rows) -> str:
             f"statements); {len(rows) - ok} do not and are highlighted with the reason found.")
 
 
+#: the column of a table that names the best of several options per row (loads_best_damper.csv)
+BEST_COLUMN = "best"
+
+
+def _best_summary(columns, rows) -> str:
+    """Which option a table finds best, and in how many of its rows: the table's finding, in one line."""
+    j = columns.index(BEST_COLUMN)
+    counts = collections.Counter(r[j].strip() for r in rows if j < len(r) and r[j].strip())
+    ranked = [f"{cell_text(name)} in {n}" for name, n in counts.most_common()]
+    return f"The best: {ranked[0]} of {len(rows)} rows" + "".join(f", {r}" for r in ranked[1:]) + "." if ranked else ""
+
+
 def figure_comparison(name: str, columns: list[str], rows: list[list[str]]) -> str:
     """This figure's rows of the paper-vs-reproduced table, summarised (empty if none)."""
     m = _FIG_NUMBER.match(name)
@@ -335,12 +348,16 @@ def data_uri(path) -> tuple[str, tuple | None]:
 def _table_view(path: Path) -> dict:
     columns, rows = read_table(path)
     highlight = {"column": AGREEMENT_COLUMN, "equals": "False"} if AGREEMENT_COLUMN in columns else None
-    summary = _comparison_summary(columns, rows) if highlight else ""
+    # a finding: what the table concludes, which the page also lists at its top
+    finding = (_comparison_summary(columns, rows) if highlight
+               else _best_summary(columns, rows) if BEST_COLUMN in columns else "")
+    summary = finding
     if not summary and path.suffix.lower() != ".json":  # a JSON object is a list of values, not rows
         summary = table_summary(columns, rows, highlight)
     # the page's own table (not DataFrame.to_html): it highlights the rows that miss the paper, folds a long
     # table and shows each cell in words with the file's text kept as its tooltip
     return {"kind": "table", "columns": [{"id": c, "label": column_label(c)} for c in columns], "summary": summary,
+            "finding": finding,
             "folded": len(rows) > LONG_TABLE,
             "rows": [{"miss": _highlighted(columns, r, highlight), "cells": [table_cell(v) for v in r]}
                      for r in rows]}
@@ -427,7 +444,7 @@ def render_report(sections, provenance: Mapping | None, template, overview: Mapp
               for name, group in itertools.groupby(views, key=lambda v: v.get("category") or "Other results")]
     page = env.get_template(template.name).render(
         title=(overview or {}).get("title") or "Impact dampers: the reproduced study",
-        overview=(overview or {}).get("body", ""), groups=groups,
+        overview=(overview or {}).get("body", ""), groups=groups, findings=[v for v in views if v.get("finding")],
         provenance=provenance_view(provenance) if provenance is not None else None)
     shown = [v["id"] for v in views] + (["provenance"] if provenance is not None else [])
     return page.encode("ascii", "xmlcharrefreplace").decode("ascii"), shown

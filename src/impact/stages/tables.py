@@ -75,7 +75,7 @@ def _xm_reason(ds, start, g_opt, others):
         bits.append(f"optimum at the edge of the gap grid (g={g_opt:g})")
     if matching:
         bits.append("initial condition matters: " + "; ".join(matching))
-    return "; ".join(bits) or "not explained by the start or the grid (see report)"
+    return "; ".join(bits) or "not explained by the start or the grid (nor by the sweep modes and readings of coexistence_e_trend.json)"
 
 
 def x_m_rows(datasets: dict) -> list:

@@ -13,7 +13,7 @@ from impact.model.building import Building
 from impact.model.params import G_GRAV
 from impact.model.scene import DAMPER_KINDS
 from impact.outputs.files import as_integers, flag
-from impact.outputs.labels import EVENT_CAP_MEANINGS, RUN_MEASURES
+from impact.outputs.labels import EVENT_CAP_MEANINGS, RUN_MEASURES, load_case
 from impact.stages.loads.plan import (
     RESPONSES,
     SAME,
@@ -214,7 +214,7 @@ def verdict_table(out: dict, measures=("peak_roof", "rms_roof", "peak_accel", "p
                     if flat.size == 0:
                         continue
                     worst = flat.isel(case=int(flat.argmax("case")))
-                    where = ", ".join(f"{d} {worst[d].values}" for d in r.dims)
+                    where = load_case({d: worst[d].values for d in r.dims})
                     values = flat.values
                     rows.append({"damper": str(damper), "mass_ratio": float(mr), "load": label, "measure": measure,
                                  "cases": int(values.size), "helps": int(np.sum(values < 1 - SAME)),
