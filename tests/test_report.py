@@ -494,3 +494,32 @@ def test_a_table_shows_words_numbers_and_dashes_keeping_the_files_text(tmp_path)
 def test_a_nested_summary_reads_as_words():
     keys = [report._key_text(k) for k, _ in report._flatten({"limits": {"centre": {"by_eigenvalue": {"max|lambda| in [0.0, 0.95)": {"landed": 3}}}}})]
     assert keys == ["limits › centre › by eigenvalue › max|λ| in [0.0, 0.95) › landed"]
+
+
+# --------------------------------------------------------------------------- figures
+
+
+def test_a_curve_lying_on_another_joins_its_legend_entry():
+    """Fig. 10's friction curves that coincide were each listed in the legend, with only one visible: a curve
+    within SAME_CURVE of one drawn before it is named in that one's entry instead."""
+    import matplotlib.pyplot as plt
+    import numpy as np
+    import xarray as xr
+
+    from impact.outputs import plotting
+
+    def sweep(xm):
+        g = np.array([0.5, 1.0, 1.5])
+        return xr.Dataset({"X_m": (("start", "gap_ratio"), [xm]), "ipc_class_at_max": (("start", "gap_ratio"), [[2] * 3])},
+                          coords={"gap_ratio": g, "start": ["centre"]})
+
+    base = [0.6, 0.4, 0.5]
+    specs = [dict(damper="cid", mu=0.01, e=0.25, nu=nu) for nu in (0.0, 0.05, 0.5)]
+    fig, ax = plt.subplots()
+    drawn = []
+    for spec, xm in zip(specs, (base, [x + 1e-3 for x in base], [0.9, 0.8, 0.7])):
+        plotting._draw_curve(ax, sweep(xm), spec, "C0", drawn)
+    labels = [h.get_label() for h in ax.get_legend_handles_labels()[0]]
+    plt.close(fig)
+    assert labels == ["CID μ=0.01 e=0.25, start centre; CID μ=0.01 e=0.25 ν=0.05, start centre (on it)",
+                      "CID μ=0.01 e=0.25 ν=0.5, start centre"]

@@ -29,13 +29,26 @@ def curve_label(spec: dict) -> str:
     return " ".join(parts)
 
 
-def _draw_curve(ax, ds, spec, color):
+#: two curves of a panel closer than this everywhere (in X_m) are drawn on one another: the legend says so
+SAME_CURVE = 5e-3
+
+
+def _draw_curve(ax, ds, spec, color, drawn: list):
+    """One curve per start; a curve that lies on one drawn before it in the panel joins that one's legend entry
+    instead of having its own (a reader would look for it in vain)."""
     g = ds["gap_ratio"].values
     for start in ds["start"].values:
         xm = ds["X_m"].sel(start=start).values
         ipc = ds["ipc_class_at_max"].sel(start=start).values
         style = START_STYLE.get(str(start), "-")
-        ax.plot(g, xm, style, color=color, lw=1.0, label=f"{curve_label(spec)}, start {start}")
+        name = f"{curve_label(spec)}, start {start}"
+        under = next((line for line, ys in drawn if ys.shape == xm.shape and np.all(np.abs(ys - xm) <= SAME_CURVE)),
+                     None)
+        if under is not None:
+            under.set_label(f"{under.get_label()}; {name} (on it)")
+        line, = ax.plot(g, xm, style, color=color, lw=1.0, label="_nolegend_" if under is not None else name)
+        if under is None:
+            drawn.append((line, xm))
         if "X_m_refined" in ds:  # the true peak between grid frequencies, as a thin line
             ax.plot(g, ds["X_m_refined"].sel(start=start).values, style, color=color, lw=0.4)
         for cls, (marker, fill, _) in IPC_MARKERS.items():
@@ -65,8 +78,9 @@ def plot_figure(fig_cfg: dict, datasets: dict, tmd: dict | None, outputs) -> Non
     fig, axes = plt.subplots(nrows, ncols, figsize=(6.2 * ncols, 5.6 * nrows), squeeze=False, layout="constrained")
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for ax, panel in zip(axes.flat, panels):
+        drawn = []
         for k, spec in enumerate(panel["curves"]):
-            _draw_curve(ax, datasets[curve_id(spec)], spec, colors[k % len(colors)])
+            _draw_curve(ax, datasets[curve_id(spec)], spec, colors[k % len(colors)], drawn)
         if tmd is not None:
             ax.axhline(tmd["X_m"], color="k", ls="--", lw=1.0,
                        label=f"optimum TMD (f={tmd['f']:.3f}, βt={tmd['beta_t']:.3f})")
