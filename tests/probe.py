@@ -3,7 +3,8 @@
 draw_scene(rng) builds one scene: 1 to 4 storeys (uniform, or explicit with floor-to-floor mass and
 stiffness ratios up to 1e2), 0 to 3 dampers of 1 to 6 units (CID, PID, TMD) on random floors, gaps from
 1e-6 of the motion's scale to far beyond it, e anywhere in [0, 1], friction under some CIDs, tunings from
-1e-2 to MAX_TUNING (mostly 0.1 to 10), and one load (harmonic on a floor, a stretch of a real record, a
+1e-2 to MAX_TUNING (mostly 0.1 to 10; below MIN_TUNING the model refuses them by name, as a user would
+meet it), and one load (harmonic on a floor, a stretch of a real record, a
 Kanai-Tajimi motion, or a narrow-band wind force).  violations(scene, result) lists every promise the run broke.
 """
 

@@ -20,7 +20,16 @@ from impact import __version__
 from impact.closed_form.pushover import PATTERNS as PUSHOVER_PATTERNS
 from impact.closed_form.tmd import tuned_for
 from impact.model.kinds import KINDS, DamperKind
-from impact.model.params import IMPACT_KINDS, MAX_TUNING, STARTS, ParameterError, Protocol, System, ipc_label
+from impact.model.params import (
+    IMPACT_KINDS,
+    MAX_TUNING,
+    MIN_TUNING,
+    STARTS,
+    ParameterError,
+    Protocol,
+    System,
+    ipc_label,
+)
 from impact.model.scene import DAMPER_KINDS, Damper, GroundMotion, Scene, paper_scene_from_system
 
 DEFAULTS = dict(mu=0.01, beta=0.0048, e=0.25, gap_ratio=1.0, force_ratio=0.096)
@@ -672,11 +681,11 @@ def build_parser() -> argparse.ArgumentParser:
     qk.add_argument("--gap-m", type=_ranged(0, 1e3), default=None, help="total clearance d in metres (CID, PID)")
     qk.add_argument("--e", type=_ranged(0, 1), default=None,
                     help=f"coefficient of restitution (CID, PID), in [0, 1] (default {QUAKE_DEFAULTS['e']})")
-    qk.add_argument("--rp", type=_ranged(0, MAX_TUNING, lo_open=True), default=None,
-                    help=f"PID tuning: pendulum frequency over the building's fundamental, in (0, {MAX_TUNING:g}] "
+    qk.add_argument("--rp", type=_ranged(MIN_TUNING, MAX_TUNING), default=None,
+                    help=f"PID tuning: pendulum frequency over the building's fundamental, in [{MIN_TUNING:g}, {MAX_TUNING:g}] "
                          f"(default {QUAKE_DEFAULTS['rp']})")
-    qk.add_argument("--tuning", type=_ranged(0, MAX_TUNING, lo_open=True), default=None,
-                    help=f"TMD tuning f: its frequency over the building's fundamental, in (0, {MAX_TUNING:g}] "
+    qk.add_argument("--tuning", type=_ranged(MIN_TUNING, MAX_TUNING), default=None,
+                    help=f"TMD tuning f: its frequency over the building's fundamental, in [{MIN_TUNING:g}, {MAX_TUNING:g}] "
                          f"(default {TMD_DESIGN_DEFAULT})")
     qk.add_argument("--damping", type=_ranged(0, 1, hi_open=True), default=None,
                     help=f"damping ratio of the TMD, or of the PID's pendulum, in [0, 1) "

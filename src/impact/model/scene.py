@@ -25,6 +25,7 @@ from impact.model.kinds import DamperKind, damper_kinds, kind_of, sliding_kinds
 from impact.model.params import (
     G_GRAV,
     MAX_TUNING,
+    MIN_TUNING,
     STARTS,
     ParameterError,
     _check,
@@ -71,7 +72,7 @@ class Damper:
     def __post_init__(self):
         check_choice("kind", self.kind, damper_kinds())  # the registry as it is now: a kind added later counts
         kind = kind_of(self.kind)
-        tuning_floor = "(0" if kind.spring else "[0"
+        tuning_floor = f"[{MIN_TUNING:g}" if kind.spring else "[0"
         check_fields(self, mass="(0, 1e15]", gap="[0, 1e12]", e="[0, 1]", tuning=f"{tuning_floor}, {MAX_TUNING:g}]",
                      damping="[0, 1)", nu="[0, 100]")
         check_integer("units", self.units, 1, 60)
