@@ -19,7 +19,7 @@ from pathlib import Path
 from impact import __version__
 from impact.closed_form.pushover import PATTERNS as PUSHOVER_PATTERNS
 from impact.closed_form.tmd import tuned_for
-from impact.model.kinds import KINDS, DamperKind
+from impact.model.kinds import KINDS, DamperKind, either, kinds_with
 from impact.model.params import (
     IMPACT_KINDS,
     MAX_TUNING,
@@ -119,7 +119,7 @@ def _system(args) -> System:
     pendulum = KINDS[args.damper].spring
     rp = args.rp if args.rp is not None else (1.0 if pendulum else 0.0)
     if not pendulum and args.rp is not None:
-        raise ParameterError(f"--rp is only for --damper {' or '.join(k for k in IMPACT_KINDS if KINDS[k].spring)}")
+        raise ParameterError(f"--rp is only for --damper {either(k for k in kinds_with('spring') if KINDS[k].walls)}")
     return System.from_gap_ratio(args.damper, mu=args.mu, beta=args.beta, e=args.e, gap_ratio=args.gap_ratio,
                                  rp=rp, force_ratio=args.force_ratio, phase=args.phase, nu=args.nu,
                                  frequency_hz=args.frequency_hz, unit_m=args.unit_m)
@@ -252,7 +252,7 @@ def _quake_damper_flags(args) -> dict:
         if getattr(args, name) is not None and name not in uses:
             users = [kind for kind, flags in QUAKE_DAMPER_FLAGS.items() if name in flags]
             raise ParameterError(f"--{name.replace('_', '-')} is not used by --damper {args.damper}: "
-                                 f"it is a flag of --damper {' or '.join(users)}")
+                                 f"it is a flag of --damper {either(users)}")
     return {name: getattr(args, name) if getattr(args, name) is not None else QUAKE_DEFAULTS.get(name)
             for name in uses}
 
@@ -382,7 +382,7 @@ def cmd_quake(args) -> dict:
                   collapse_drift_ratio=args.collapse_drift_ratio)
     if (args.plot or args.compare_bare) and not dampers:
         flag = "--plot draws a damper's strokes and impacts" if args.plot else "--compare-bare compares a damper"
-        raise ParameterError(f"{flag}: give --damper {' or '.join(KINDS)}")
+        raise ParameterError(f"{flag}: give --damper {either(KINDS)}")
     plotted = _plotted(scene, building.period1 / 50) if args.plot or args.series else {}
     res = simulate(scene, **plotted)
     bare = None

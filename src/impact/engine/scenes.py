@@ -32,7 +32,7 @@ from impact.engine.diagnostics import read_diagnostics
 from impact.engine.jitcache import compile_lock
 from impact.engine.scene_loop import run_scene
 from impact.model.building import Building
-from impact.model.kinds import DamperKind
+from impact.model.kinds import KINDS, DamperKind
 from impact.model.params import ParameterError
 from impact.model.scene import Damper, ForceRecord, GroundMotion, Harmonic, Scene
 
@@ -392,9 +392,12 @@ def compile_scene_loops(yielding: tuple[bool, ...] = (False,)) -> None:
     building = Building.uniform(1, 1.0, 0.05)
     mass = 0.02 * building.total_mass
     loads = (Harmonic(1e3, building.omega1), GroundMotion(np.array([0.0, 1.0, -1.0, 0.0]), 0.1))
+    # a kind whose mass slides between walls, and one with a spring between walls: the registry's, not named here
+    sliding = next(name for name, kind in KINDS.items() if kind.slides and kind.walls)
+    sprung = next(name for name, kind in KINDS.items() if kind.spring and kind.walls)
     for springs, friction, load, yields in itertools.product((False, True), (False, True), loads, yielding):
-        dampers = [Damper("cid", mass, gap=0.01, e=0.5, nu=0.1 if friction else 0.0)]
+        dampers = [Damper(sliding, mass, gap=0.01, e=0.5, nu=0.1 if friction else 0.0)]
         if springs:
-            dampers.append(Damper("pid", mass, gap=0.01, e=0.5))
+            dampers.append(Damper(sprung, mass, gap=0.01, e=0.5))
         built = building.yielding(0.01, 0.1) if yields else building
         simulate_scene(Scene(built, tuple(dampers), load, duration=0.5))

@@ -54,14 +54,24 @@ def damper_kinds() -> tuple[str, ...]:
     return tuple(KINDS)
 
 
+def kinds_with(part: str) -> tuple[str, ...]:
+    """The kinds made with `part` ('walls', 'spring', 'dashpot', 'slides', 'paper'), in the registry's order."""
+    return tuple(name for name, k in KINDS.items() if getattr(k, part))
+
+
+def either(names) -> str:
+    """Names as a message offers them: 'a', 'a or b', 'a or b or c'."""
+    return " or ".join(names)
+
+
 def impact_kinds() -> tuple[str, ...]:
     """The kinds with walls, whose units strike."""
-    return tuple(name for name, k in KINDS.items() if k.walls)
+    return kinds_with("walls")
 
 
 def sliding_kinds() -> str:
     """The kinds whose mass may slide on its floor, as a message names them ('cid', or 'cid' or 'x')."""
-    return " or ".join(repr(name) for name, k in KINDS.items() if k.slides)
+    return either(map(repr, kinds_with("slides")))
 
 
 def kind_of(name: str) -> DamperKind:

@@ -230,7 +230,7 @@ def _fmt(x: float) -> str:
 def curve_id(spec: dict) -> str:
     """File-name id of a curve from its parameters, e.g. 'pid_mu0.01_e0.25_rp1'."""
     name = f"{spec['damper']}_mu{_fmt(spec['mu'])}_e{_fmt(spec['e'])}"
-    if spec["damper"] == "pid":
+    if KINDS[spec["damper"]].spring:
         name += f"_rp{_fmt(spec['rp'])}"
     if spec.get("nu", 0.0):
         name += f"_nu{_fmt(spec['nu'])}"

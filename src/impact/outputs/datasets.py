@@ -14,6 +14,7 @@ import math
 import numpy as np
 import xarray as xr
 
+from impact.model.kinds import KINDS
 from impact.model.params import Protocol, System
 from impact.outputs.files import flag
 from impact.outputs.labels import EVENT_CAP_MEANINGS
@@ -105,7 +106,7 @@ def add_reductions(ds: xr.Dataset) -> None:
 def _attributes(base: System, protocol: Protocol, curve, config, sweep_mode) -> dict:
     params = {"damper": base.kind, "mu": base.mu, "beta": base.beta, "e": base.e,
               "force_ratio": base.force_ratio, "phase": base.phase, "a_max": base.a_max}
-    if base.kind == "pid":
+    if KINDS[base.kind].spring:
         params["rp"] = base.rp
     if base.nu > 0:
         params.update(nu=base.nu, frequency_hz=base.frequency_hz, unit_m=base.unit_m,

@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from impact.engine.paper import sweep
+from impact.model.kinds import either, kind_of, kinds_with
 from impact.model.params import ParameterError, Protocol, System, curve_id, frequency_grid
 from impact.outputs.datasets import curve_dataset
 from impact.stages.readings import add_readings
@@ -100,8 +101,8 @@ def curve_system(cfg: dict, spec: dict, gap_ratio: float) -> System:
     kw = dict(rp=spec.get("rp", 0.0), force_ratio=structure["force_ratio"], phase=cfg["protocol"].get("phase", 0.0))
     if spec.get("nu", 0.0):
         kw.update(nu=spec["nu"], **friction_scale(cfg, spec))
-    if spec["damper"] == "cid" and "rp" in spec:
-        raise ParameterError("rp is only for damper pid")
+    if "rp" in spec and not kind_of(spec["damper"]).spring:
+        raise ParameterError(f"rp is only for a damper with a spring ({either(kinds_with('spring'))})")
     return System.from_gap_ratio(spec["damper"], mu=spec["mu"], beta=structure["beta"], e=spec["e"],
                                  gap_ratio=gap_ratio, **kw)
 
