@@ -215,6 +215,16 @@ def _probe_scene(i):
         return exc
 
 
+def _probe_scene_beyond_the_tunings(i):
+    """Scene i of the seeded probe drawn as it was before the model bounded a damper's tuning: for the tests of
+    mechanisms (a half row's start, an escape's travel back) that a stiff pendulum exercised, which are the
+    engine's, not the tuning's."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr("impact.model.scene.MAX_TUNING", 1e3)
+        mp.setattr("impact.model.scene.MIN_TUNING", 1e-2)
+        return _probe_scene(i)
+
+
 def _probe_violations(scene, scale):
     from probe import SAMPLES, violations
 
@@ -246,8 +256,15 @@ def test_random_scenes_run_to_the_end_exactly():
             if problems:
                 failures.append((i, problems))
     assert failures == []
-    assert len(refused) <= PROBE_SCENES // 20, refused
+    assert len(_beyond_the_draw(refused.values())) <= PROBE_SCENES // 20, refused
     assert all(" = " in why or " must " in why or "too coarse" in why for why in refused.values()), refused
+
+
+def _beyond_the_draw(refusals) -> list:
+    """The refusals a probe did not draw on purpose: it draws tunings a decade beyond either end of
+    [MIN_TUNING, MAX_TUNING] (11 below and 9 above in the suite's 300 scenes), to see them refused by name; any other refusal
+    is a scene the probe spent for nothing, and a twentieth is the most it may spend so."""
+    return [why for why in refusals if not why.startswith("tuning = ")]
 
 
 YIELD_PROBE_SCENES = 120
@@ -259,12 +276,12 @@ def test_random_scenes_on_yielding_buildings_run_to_the_end_exactly():
     plastic work in the energy balance and the drifts' certified peaks above every dense sample."""
     from probe import draw_yielding_scene
 
-    failures, refused, yielded = [], 0, 0
+    failures, refused, yielded = [], [], 0
     for i in range(YIELD_PROBE_SCENES):
         try:
             scene, scale = draw_yielding_scene(np.random.default_rng([PROBE_SEED, 1, i]), seconds=1.0)
-        except ParameterError:
-            refused += 1
+        except ParameterError as exc:
+            refused.append(str(exc))
             continue
         from probe import SAMPLES, violations
         result = simulate(scene, measures=("peaks", "samples"), times=np.linspace(0.0, scene.t_end, SAMPLES))
@@ -273,7 +290,7 @@ def test_random_scenes_on_yielding_buildings_run_to_the_end_exactly():
         if problems:
             failures.append((i, problems))
     assert failures == []
-    assert refused <= YIELD_PROBE_SCENES // 20
+    assert len(_beyond_the_draw(refused)) <= YIELD_PROBE_SCENES // 20, refused
     assert yielded >= YIELD_PROBE_SCENES // 2  # the draw reaches the yielding branches, not only the elastic ones
 
 
@@ -307,7 +324,7 @@ def test_a_pendulum_pair_pressed_to_its_wall_beside_a_stiff_pendulum_comes_to_re
     searched for their return started 1.4e-16 m off the wall their state was on: every flight fell that much
     farther than it rose and came back 7 % faster, which the strike took away again, 2.3 million times a
     second.  With the half row started at the state the chatter runs out and the pair rests on its wall."""
-    scene, scale = _probe_scene(163)
+    scene, scale = _probe_scene_beyond_the_tunings(163)
     diag = simulate(scene, measures=("peaks",)).diagnostics
     _assert_finished_exactly(diag, scale)
     assert diag["impacts"] < 10_000 and diag["sticking_episodes"] > 0
@@ -319,7 +336,7 @@ def test_a_stiff_pendulum_grazing_its_wall_leaves_it_once():
     reads 3e-17 m beyond the wall it is leaving, 25 times the contact tolerance; the escape proved its
     clearance from the derivatives alone, so the search found the same wall 1e-12 s later, 2,000 times,
     until the cap.  The escape now travels back that distance before its clearance counts."""
-    scene, scale = _probe_scene(296)
+    scene, scale = _probe_scene_beyond_the_tunings(296)
     diag = simulate(scene, measures=("peaks",)).diagnostics
     _assert_finished_exactly(diag, scale)
     assert diag["grazing_events"] < 0.01 * diag["segments"]
@@ -461,13 +478,16 @@ HELD_AT_SCALE = {
 #: of a peak 1.5e-9 above it.  Strict: the day a promise holds, its test fails, and the scene moves above.  (Scenes
 #: that ran past 60 s or to the event cap, as 2067450001-2283 does, are too slow for the suite: the tool reproduces
 #: them.)
-OPEN_AT_SCALE = {(AT_SCALE_SEED, 2512): "energy residual", (2067450001, 184): "energy residual",
-                 (2067450001, 2583): "energy residual"}
-#: scenes the probe at scale found that the model now refuses by name: a PID or TMD tuned below MIN_TUNING.
-#: 3038120592-2847 (energy to 3.7e-7) broke through its TMD of tuning 0.040 (alone on its building, with no
-#: impact, 3.9e-9; at 0.16, 8e-11); 3761029462-2135 (held for a unit released through its wall, the class
-#: 870, 751 and 1235 still hold) has a PID of tuning 0.015
-REFUSED_AT_SCALE = {(3038120592, 2847): "tuning = 0.040", (AT_SCALE_SEED, 2135): "tuning = 0.014"}
+OPEN_AT_SCALE = {(2067450001, 184): "energy residual"}
+#: scenes the probe at scale found that the model now refuses by name: a PID or TMD tuned outside
+#: [MIN_TUNING, MAX_TUNING].  3038120592-2847 (energy to 3.7e-7) broke through its TMD of tuning 0.040 (alone on
+#: its building, with no impact, 3.9e-9; at 0.16, 8e-11); 3761029462-2512 (1.7e-9) through its PID of tuning
+#: 400 (1.9e-10 at 100); 2067450001-2583 (yielding, 1.6e-8) through its TMD of tuning 548 (without it 1.7e-11;
+#: the same TMD at 20: 1.2e-10, but at 30 to 100: 1.3e-9 to 2.4e-9, so yielding storeys beside a stiff spring
+#: stay an open class); 3761029462-2135 (held for a unit released through its wall, the class 870, 751 and
+#: 1235 still hold) has a PID of tuning 0.015
+REFUSED_AT_SCALE = {(3038120592, 2847): r"tuning = 0\.040\d*", (AT_SCALE_SEED, 2135): r"tuning = 0\.014\d*",
+                    (AT_SCALE_SEED, 2512): r"tuning = 399\.7\d*", (2067450001, 2583): r"tuning = 548\.2\d*"}
 
 
 def _at_scale_ids(scenes):
@@ -504,7 +524,7 @@ def test_a_scene_the_probe_at_scale_found_keeps_its_promise(seed_index, promise)
 def test_a_scene_the_probe_at_scale_found_with_too_soft_a_damper_is_refused_by_name(seed_index, value):
     from probe import scene_of
 
-    with pytest.raises(ParameterError, match=rf"{value}\d* is out of range: allowed \[0.1, 1000.0\]"):
+    with pytest.raises(ParameterError, match=rf"{value} is out of range: allowed \[0.1, 100.0\]"):
         scene_of(*seed_index)
 
 
@@ -520,6 +540,7 @@ def test_a_soft_tmds_energy_residual_grows_as_its_tuning_falls():
     rng = np.random.default_rng([3038120592, 2847])
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr("impact.model.scene.MIN_TUNING", 1e-3)  # to draw the scene as it was found, and go below
+        mp.setattr("impact.model.scene.MAX_TUNING", 1e3)
         scene, _ = draw_scene(rng, reach=WIDE)
         tmd = next(d for d in scene.dampers if d.kind == "tmd")
         residual = {t: abs(simulate(replace(scene, dampers=(replace(tmd, units=1, tuning=t),)),
