@@ -483,7 +483,8 @@ OPEN_AT_SCALE = {
     # particular solution cancels the modal part, as below MIN_TUNING (the fresh probe of seed 3297466453 found two
     # more, one with no damper at all)
     (2067450001, 184): "energy residual", (3297466453, 1137): "energy residual",
-    # a PID of e = 0.72 in a 12 nm gap on a yielding building: the stall guard stops the run at its left wall
+    # a PID of e = 0.72 in a 12 nm gap beside six plastic CID units in a 68 nm gap on the same floor of a yielding
+    # building: at t = 2.3318 s (its storey elastic then) the stall guard stops the run at the PID's left wall
     (3297466453, 2244): "event cap",
 }
 #: scenes the probe at scale found that the model now refuses by name: a PID or TMD tuned outside
