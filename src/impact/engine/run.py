@@ -104,8 +104,12 @@ LOOPS = {"paper": Loop(_paper_fits, _run_paper), "scene": Loop(lambda scene, mea
 def simulate(scene: Scene, measures=DEFAULT_MEASURES, *, record: int = 0, times=None) -> SceneResult:
     """Run a scene on the engine's first loop (:data:`LOOPS`) that measures what is asked.
 
-    measures: names from :data:`MEASURES`; record: keep up to this many impact records (with "records");
-    times: sorted times of the dense output (with "samples").
+    measures: names from :data:`MEASURES`, what the run must return beside its diagnostics and final state:
+    "amplitude" (the paper's amplitude, sqrt 2 times the roof's RMS over the window), "impacts" (the impact count),
+    "peaks" (the certified peaks of the roof, every drift and every unit's stroke, and their RMS), "records" (each
+    impact's time, unit, side, velocities and impulse, up to `record` of them), "samples" (every degree of freedom's
+    displacement and velocity at `times`, a sorted array of instants).  Asking only for what is read lets the
+    dispatch pick the fastest loop that measures it.
     """
     asked = frozenset(measures)
     unknown = sorted(asked - set(MEASURES))

@@ -41,7 +41,9 @@ CACHE_SLOTS = 16        # configurations whose eigen-data are kept at once
 
 @dataclass
 class SceneResult:
-    """Measures of one scene run; lengths, times and accelerations in the scene's units."""
+    """Measures of one scene run, in the units the scene's building and load were given in: metres, seconds and
+    m/s² for a building in SI (kg, N/m) under a GroundMotion in m/s² or a force in N; the paper's model units
+    (M = K = 1, omega = 1) for its harmonic study."""
 
     scene: Scene
     peak_roof_displacement: float

@@ -164,7 +164,12 @@ class Building:
 
     @classmethod
     def explicit(cls, masses, storey_stiffness, zeta: float | None = None, storey_damping=None) -> "Building":
-        """Given floor masses and storey stiffnesses; damping as a modal ratio or as storey dashpots."""
+        """Given floor masses and storey stiffnesses; damping as a modal ratio or as storey dashpots.
+
+        masses: each floor's mass, floor 1 (the lowest) first (kg in SI); storey_stiffness: each storey's lateral
+        stiffness, storey 1 (floor 1 to the ground) first (N/m); zeta: one modal damping ratio for every mode, or
+        storey_damping: each storey's dashpot (N s/m), in the same order.  Both arrays as long as the storeys.
+        """
         m, k = _checked_floors(masses, storey_stiffness)
         if (zeta is None) == (storey_damping is None):
             raise ParameterError("give exactly one of zeta (modal damping ratio) and storey_damping (dashpots)")

@@ -185,7 +185,8 @@ class Scene:
     start
         where every wall damper's mass starts: centre, or resting on the left or right wall
     gravity
-        acceleration of gravity in the scene's units (friction only)
+        acceleration of gravity in the scene's units, those its building was given in: m/s² for a building in
+        SI, 1 in the paper's model units (friction only)
     unit_starts
         each unit's initial displacement from the middle of its walls, in unit_list() order (overrides start; a unit
         at +-d/2 rests on that wall; a TMD's entry must be 0)
