@@ -450,6 +450,21 @@ def test_the_page_states_its_findings_first(tmp_path):
     assert "Plain" not in top
 
 
+def test_verdict_tables_state_what_they_conclude(tmp_path):
+    """The IDA's verdicts: which damper reduces the median drift most, counted per case; the loads' verdicts: how
+    often each damper makes a run worse.  Counted from the rows, never typed."""
+    _csv(tmp_path / "ida.csv", ["building", "damper", "mass_ratio", "group", "median_reduction"],
+         [["s1", "cid", "0.02", "far", "0.05"], ["s1", "tmd", "0.02", "far", "0.2"],
+          ["s1", "cid", "0.02", "near", "0.3"], ["s1", "tmd", "0.02", "near", "0.1"],
+          ["s3", "cid", "0.02", "far", "nan"], ["s3", "tmd", "0.02", "far", "0.1"]])
+    _csv(tmp_path / "loads.csv", ["damper", "cases", "makes_worse"],
+         [["cid", "100", "10"], ["cid", "100", "0"], ["tmd", "50", "1"]])
+    assert report._table_view(tmp_path / "ida.csv")["finding"] == (
+        "The largest median reduction: TMD in 2 of 3 cases, CID in 1.")
+    assert report._table_view(tmp_path / "loads.csv")["finding"] == (
+        "Runs a damper makes worse (over 5 %), of all its runs and measures: CID 5 %, TMD 2 %.")
+
+
 # --------------------------------------------------------------------------- words for identifiers
 
 

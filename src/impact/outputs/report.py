@@ -28,6 +28,7 @@ import io
 import itertools
 import json
 import logging
+import math
 import re
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -294,6 +295,43 @@ def _best_summary(columns, rows) -> str:
     return f"The best: {ranked[0]} of {len(rows)} rows" + "".join(f", {r}" for r in ranked[1:]) + "." if ranked else ""
 
 
+def _largest_reduction_summary(columns, rows) -> str:
+    """Which damper reduces the most, counted over the table's cases (every column but the damper and the
+    measures): the finding of a verdict table with a median reduction per damper and case."""
+    jd, jr = columns.index("damper"), columns.index("median_reduction")
+    case_columns = [j for j, c in enumerate(columns) if c in ("building", "group", "mass_ratio", "load", "archetype")]
+    best: dict[tuple, tuple[float, str]] = {}
+    for r in rows:
+        if _is_number(r[jr]) and math.isfinite(float(r[jr])):
+            case = tuple(r[j] for j in case_columns)
+            best[case] = max(best.get(case, (-math.inf, "")), (float(r[jr]), r[jd]))
+    counts = collections.Counter(damper for _, damper in best.values())
+    ranked = [f"{cell_text(name)} in {n}" for name, n in counts.most_common()]
+    return (f"The largest median reduction: {ranked[0]} of {len(best)} cases" + "".join(f", {r}" for r in ranked[1:])
+            + ".") if ranked else ""
+
+
+def _worse_share_summary(columns, rows) -> str:
+    """How often each damper makes a run worse, over all the table's runs: a helps/worse table's finding."""
+    jd, jc, jw = columns.index("damper"), columns.index("cases"), columns.index("makes_worse")
+    runs, worse = collections.Counter(), collections.Counter()
+    for r in rows:
+        if _is_number(r[jc]) and _is_number(r[jw]):
+            runs[r[jd]] += int(float(r[jc]))
+            worse[r[jd]] += int(float(r[jw]))
+    shares = [f"{cell_text(d)} {100 * worse[d] / runs[d]:.0f} %" for d in runs if runs[d]]
+    return f"Runs a damper makes worse (over 5 %), of all its runs and measures: {', '.join(shares)}." if shares else ""
+
+
+#: what a table concludes, by the columns it has: (the columns, the finding), the first that fits is the table's
+FINDINGS = (((BEST_COLUMN,), _best_summary), (("damper", "median_reduction"), _largest_reduction_summary),
+            (("damper", "cases", "makes_worse"), _worse_share_summary))
+
+
+def _finding(columns, rows) -> str:
+    return next((found(columns, rows) for needs, found in FINDINGS if set(needs) <= set(columns)), "")
+
+
 def figure_comparison(name: str, columns: list[str], rows: list[list[str]]) -> str:
     """This figure's rows of the paper-vs-reproduced table, summarised (empty if none)."""
     m = _FIG_NUMBER.match(name)
@@ -349,8 +387,7 @@ def _table_view(path: Path) -> dict:
     columns, rows = read_table(path)
     highlight = {"column": AGREEMENT_COLUMN, "equals": "False"} if AGREEMENT_COLUMN in columns else None
     # a finding: what the table concludes, which the page also lists at its top
-    finding = (_comparison_summary(columns, rows) if highlight
-               else _best_summary(columns, rows) if BEST_COLUMN in columns else "")
+    finding = _comparison_summary(columns, rows) if highlight else _finding(columns, rows)
     summary = finding
     if not summary and path.suffix.lower() != ".json":  # a JSON object is a list of values, not rows
         summary = table_summary(columns, rows, highlight)
