@@ -183,3 +183,23 @@ def test_the_ida_headline_is_the_table():
                   f"(median reduction {span(tmd.median_reduction.min(), tmd.median_reduction.max())}; "
                   f"{span(far.median_reduction.min(), far.median_reduction.max())} far-field), and harms few ground "
                   f"motions ({span(tmd.share_raised.min(), tmd.share_raised.max())})")
+
+
+def test_the_choice_per_building_period_is_the_tables():
+    best = pd.read_csv(DATA / "loads_best_damper.csv")
+    verdicts = pd.read_csv(DATA / "ida_verdicts.csv").query("mass_ratio == 0.02")
+    period = lambda table: table.building.str.split("_T").str[1]  # noqa: E731
+    best, verdicts = best.assign(T=period(best)), verdicts.assign(T=period(verdicts))
+    winners = verdicts.loc[verdicts.groupby(["building", "group"]).median_reduction.idxmax()]
+
+    def rounded(fraction):  # a slight increase rounds to 0, not -0
+        text = f"{100 * fraction:.0f}"
+        return "0" if text == "-0" else text
+
+    for t in ("0.5", "1", "2"):
+        loads, ida = best[best["T"] == t].best.value_counts(), winners[winners["T"] == t].damper.value_counts()
+        r = {d: verdicts[(verdicts["T"] == t) & (verdicts.damper == d)].median_reduction for d in ("tmd", "pid", "cid")}
+        ranges = {d: f"{rounded(r[d].min())} to {rounded(r[d].max())} %" for d in r}
+        says(RESULTS, f"T1 = {t} s:** the TMD is best in {loads.get('tmd', 0)} of {loads.sum()} load cases and "
+                      f"{ida.get('tmd', 0)} of {ida.sum()} IDA cases (median drift reduction {ranges['tmd']}; "
+                      f"PID {ranges['pid']}, CID {ranges['cid']})")
