@@ -9,6 +9,7 @@ naming the flag and exit status 2.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import functools
 import json
 import math
@@ -387,8 +388,7 @@ def cmd_quake(args) -> dict:
     res = simulate(scene, **plotted)
     bare = None
     if args.plot or args.compare_bare:
-        bare = simulate(Scene(building, (), load, duration=args.duration_s, collapse_drift_ratio=args.collapse_drift_ratio),
-                        **({"measures": ("amplitude", "samples"), "times": plotted["times"]} if plotted else {}))
+        bare = simulate(dataclasses.replace(scene, dampers=()), **plotted)  # the same scene and measures, bare
     if args.plot:
         _plot(args.plot, scene, res, f"impact {' '.join(sys.argv[1:])}", "m", "N s",
               roof_bare=bare.samples["q"][:, building.storeys - 1])
@@ -423,7 +423,7 @@ def _write_series(path: str, scene, res) -> None:
     columns.update({f"floor{i + 1}_m": q[:, i] for i in range(storeys)})
     unit = storeys
     for d, damper in enumerate(scene.dampers, start=1):
-        floor = (damper.floor or storeys) - 1
+        floor = scene.floor_index(damper.floor)
         for j in range(damper.units):
             columns[f"damper{d}_unit{j + 1}_stroke_m"] = q[:, unit] - q[:, floor]
             unit += 1
