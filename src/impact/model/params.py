@@ -35,14 +35,14 @@ class ParameterError(ValueError):
 #: damper's spring is over 1e4 times the building's stiffness per mass, and the modal tables' round-off, which
 #: grows about as tuning^1.5 to tuning^2, passes the 1e-9 to which every run balances.  Measured on 40 probe
 #: scenes with their PIDs and TMDs made TMDs of one tuning (no impacts): the largest residual was 1.1e-11 at 30,
-#: 1.5e-10 at 100, 5.7e-10 at 300 and 4.3e-9 at 1e3 (2 of the 40 beyond 1e-9); probe scene 3761029462-2512, a
+#: 1.5e-10 at 100, 5.7e-10 at 300 and 4.2e-9 at 1e3 (2 of the 40 beyond 1e-9; tools/tuning_bounds.py); probe scene 3761029462-2512, a
 #: PID of tuning 400: 1.7e-9, and 1.9e-10 with that PID at 100.  (It was 1e3, from one scene's 2e-10 there.)
 MAX_TUNING = 100.0
 #: the lowest tuning of a scene's PID or TMD: below it the damper's mode is so soft that a load record's
 #: particular solution (the static response, which grows as 1 / tuning^2) and a segment's modal part cancel, and
 #: the energy balance's round-off grows about as tuning^-2.5.  Measured on 40 probe scenes with every PID and TMD
 #: set to one tuning: the largest residual was 1.2e-11 at 0.1, 6.8e-10 at 0.03 and 3.8e-8 at 0.01 (4 of the 40
-#: beyond the 1e-9 to which every run balances); a 10-storey building with a TMD of 0.04 beside it: 3.9e-9 with no
+#: beyond the 1e-9 to which every run balances; tools/tuning_bounds.py); a 10-storey building with a TMD of 0.04: 3.9e-9 with no
 #: impact at all.  A PID or TMD tuned ten times below the building's fundamental damps nothing of it.
 MIN_TUNING = 0.1
 
