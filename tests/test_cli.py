@@ -66,6 +66,8 @@ def test_amplitude_ratio_means_the_same_in_masri_and_run(capsys):
     (["quake", "--record", "elcentro", "--damper", "tmd", "--gap-m", "0.1"], "--gap-m is not used by --damper tmd"),
     (["quake", "--record", "elcentro", "--plot", "x.png"], "--plot draws a damper"),
     (["run", "--e", "2"], "--e"),
+    # a PID tuned beyond what a scene takes is refused by its own flag, not by the scene's field (tuning)
+    (["run", "--damper", "pid", "--rp", "500"], "argument --rp: 500.0 is out of range: allowed [0.1, 100"),
     # what a new user tripped on: a plot in a format matplotlib does not draw, a dataset that is not netCDF or
     # goes to a folder that does not exist, a record in none of the forms --record takes
     (["quake", "--record", "elcentro", "--damper", "cid", "--gap-m", "0.05", "--plot", "x.txt"], ".png, .pdf, .svg"),

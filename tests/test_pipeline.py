@@ -329,6 +329,9 @@ def _rules_whose_params_changed(out: str) -> set[str]:
     # a new user's two: Table 1's numbers of units without 1, and a NaN that bounds let through
     ({"robustness": {"units": [2, 4]}}, "robustness.units: [2, 4] does not contain"),
     ({"structure": {"beta": float("nan")}}, "structure.beta = nan"),
+    # a PID the scenes would refuse (model.params.MAX_TUNING) is refused at parse time, by the config's name
+    ({"figures": {"fig09": {"panels": [{"curves": [{"damper": "pid", "mu": 0.01, "e": 0.5, "rp": 500}]}]}}},
+     "figures.fig09.panels[0].curves[0].rp: 500 is greater than the maximum of 100"),
 ])
 def test_invalid_config_fails_at_parse_time_naming_the_key(tmp_path, patch, key):
     import yaml
@@ -343,6 +346,34 @@ def test_invalid_config_fails_at_parse_time_naming_the_key(tmp_path, patch, key)
     text = proc.stdout + proc.stderr
     assert key in text, text[-2000:]
     assert "Job stats" not in text  # refused before any job was planned
+
+
+def _schema_entries(node, path=""):
+    """(path, schema) of every property of the configuration's schema, depth first."""
+    if isinstance(node, dict):
+        for key, value in node.get("properties", {}).items():
+            yield f"{path}.{key}", value
+            yield from _schema_entries(value, f"{path}.{key}")
+        for key in ("items", "then", "additionalProperties"):
+            yield from _schema_entries(node.get(key), path)
+        for value in node.get("patternProperties", {}).values():
+            yield from _schema_entries(value, f"{path}.*")
+
+
+def test_the_configs_pid_tunings_are_the_models_range():
+    """Every r' the configuration can give is one a scene takes: the schema's bounds are MIN_TUNING and MAX_TUNING
+    (a PID the paper's formulas could run but a scene refuses was reported naming the scene's field, not the
+    config's)."""
+    import yaml
+
+    from impact.model.params import MAX_TUNING, MIN_TUNING
+
+    schema = yaml.safe_load((ROOT / "workflow" / "schemas" / "config.schema.yaml").read_text())
+    tunings = {path: (entry.get("items", entry)) for path, entry in _schema_entries(schema)
+               if path.rsplit(".", 1)[-1] in ("rp", "pid_tunings")}
+    assert len(tunings) >= 5, sorted(tunings)
+    for path, bounds in tunings.items():
+        assert (bounds.get("minimum"), bounds.get("maximum")) == (MIN_TUNING, MAX_TUNING), path
 
 
 def test_the_papers_scope_writes_its_own_report_and_archive():

@@ -95,8 +95,9 @@ def _model_flags(ap: argparse.ArgumentParser) -> None:
                    help="coefficient of restitution, in [0, 1]")
     g.add_argument("--gap-ratio", type=_ranged(0, 1e6), default=DEFAULTS["gap_ratio"],
                    help="g = d / A_max, total clearance over the bare resonant amplitude, in [0, 1e6]")
-    g.add_argument("--rp", type=_ranged(0, 1e4, lo_open=True), default=None,
-                   help="PID tuning r' = omega_p/omega, in (0, 1e4] (default 1.0 for the PID; not used by the CID)")
+    g.add_argument("--rp", type=_ranged(MIN_TUNING, MAX_TUNING), default=None,
+                   help=f"PID tuning r' = omega_p/omega, in [{MIN_TUNING:g}, {MAX_TUNING:g}] (default 1.0 for the PID; "
+                        "not used by the CID)")
     g.add_argument("--force-ratio", type=_ranged(0, 1e12, lo_open=True), default=DEFAULTS["force_ratio"],
                    help="F0/K, static deflection under the force amplitude, > 0")
     g.add_argument("--phase", type=_ranged(-2 * math.pi, 2 * math.pi), default=0.0,

@@ -133,13 +133,13 @@ class System:
 
     def __post_init__(self):
         check_choice("kind", self.kind, PAPER_KINDS)
-        check_fields(self, mu="(0, 10]", beta="[0, 1)", e="[0, 1]", gap="[0, 1e12]", rp="[0, 1e4]",
+        check_fields(self, mu="(0, 10]", beta="[0, 1)", e="[0, 1]", gap="[0, 1e12]",
                      force_ratio="(0, 1e12]", phase=f"[{-2 * math.pi}, {2 * math.pi}]", nu="[0, 100]",
                      frequency_hz="(0, 1e6]", unit_m="(0, 1e6]")
         kind = KINDS[self.kind]
-        if kind.spring and self.rp == 0.0:
-            raise ParameterError(f"rp = 0.0 is out of range for kind {self.kind!r}: allowed (0, 10000]; a PID with "
-                                 "r' = 0 is the CID")
+        if kind.spring:
+            # a scene's bounds (model.scene.Damper), named as the paper names the tuning
+            check_fields(self, rp=f"[{MIN_TUNING:g}, {MAX_TUNING:g}]")
         if not kind.spring and self.rp != 0.0:
             raise ParameterError(f"rp = {self.rp!r} is not allowed for kind {self.kind!r}: the CID has no pendulum")
         if not kind.slides and self.nu != 0.0:

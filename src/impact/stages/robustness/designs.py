@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from impact.model.params import a_max, check_choice, check_fields
+from impact.model.params import MAX_TUNING, a_max, check_choice, check_fields
 from impact.model.scene import DAMPER_KINDS
 from impact.outputs.datasets import optimum
 
@@ -45,8 +45,8 @@ class Design:
 
     def __post_init__(self):
         check_choice("kind", self.kind, DAMPER_KINDS)
-        check_fields(self, mu="(0, 10]", beta="(0, 1)", gap_ratio="[0, 1e6]", e="[0, 1]", tuning="[0, 1e4]",
-                     damping="[0, 1)", force_ratio="(0, 1e12]")
+        check_fields(self, mu="(0, 10]", beta="(0, 1)", gap_ratio="[0, 1e6]", e="[0, 1]",
+                     tuning=f"[0, {MAX_TUNING:g}]", damping="[0, 1)", force_ratio="(0, 1e12]")
 
     @property
     def gap(self) -> float:
