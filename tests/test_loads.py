@@ -120,3 +120,36 @@ def test_bad_loads_config_names_the_key():
     bad["wind"]["buildings"] = ["s9_T3"]
     with pytest.raises(ParameterError, match="loads.wind.buildings"):
         LP.check_config(bad)
+
+
+#: a building of the user's own, floor by floor: a heavy soft first storey under a lighter stiffer second one
+FRAME_A = {"masses_kg": [2.0e5, 1.5e5], "storey_stiffness_n_per_m": [6.0e7, 3.0e7]}
+
+
+def test_a_building_given_floor_by_floor_is_a_building_of_the_stage():
+    """What a new user missed: their own non-uniform building in the pipeline's configuration.  It is made as
+    impact quake --masses-kg makes it, beside the uniform ones, and the wind and the time history may load it."""
+    from impact.model.building import Building
+
+    cfg = {**copy.deepcopy(CFG), "buildings": {"frame-a": FRAME_A}}
+    cfg["wind"]["buildings"] = ["frame-a"]
+    cfg["time_history"]["building"] = "frame-a"
+    LP.check_config(cfg)
+    assert list(buildings.buildings(cfg)) == ["s1_T0.5", "s3_T0.5", "frame-a"]
+    made = buildings.make_building(cfg, "frame-a")
+    same = Building.explicit(FRAME_A["masses_kg"], FRAME_A["storey_stiffness_n_per_m"], zeta=CFG["zeta"])
+    for field in ("masses", "storey_stiffness", "damping"):
+        np.testing.assert_array_equal(getattr(made, field), getattr(same, field))
+    # a stage's slice of the section carries it; without it, the slice is what it was (no other job reruns)
+    assert buildings.shared_keys(cfg)["buildings"] == {"frame-a": FRAME_A}
+    assert "buildings" not in buildings.shared_keys(CFG)
+
+
+@pytest.mark.parametrize("change, words", [
+    ({"buildings": {"frame-a": {**FRAME_A, "masses_kg": [2.0e5]}}}, r"loads.buildings.frame-a: storey_stiffness"),
+    ({"buildings": {"frame-a": {**FRAME_A, "masses_kg": [2.0e5, -1.0]}}}, r"loads.buildings.frame-a: masses"),
+    ({"storeys": [], "periods_s": []}, r"loads: no building"),
+])
+def test_a_building_that_cannot_be_made_is_refused_naming_its_key(change, words):
+    with pytest.raises(ParameterError, match=words):
+        LP.check_config({**copy.deepcopy(CFG), **change})

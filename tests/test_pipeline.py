@@ -14,6 +14,8 @@ import pytest
 import xarray as xr
 from reference import HANG_GUARD_S, copy_workflow
 
+from impact.model.scene import DAMPER_KINDS
+
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
 pytestmark = pytest.mark.slow
@@ -239,6 +241,20 @@ def _job_stats(out: str) -> dict[str, int]:
     table = out[start:out.index("Reasons:", start)]
     return {line.split()[0]: int(line.split()[1]) for line in table.splitlines()
             if len(line.split()) == 2 and line.split()[1].isdigit()}
+
+
+def test_a_building_of_ones_own_runs_through_every_stage_on_real_loads(tmp_path):
+    """loads.buildings: a non-uniform building named in the configuration gets the uniform ones' jobs in the
+    loads, ida and collapse stages, under its name, and its IDA figure can be asked for alone."""
+    own = tmp_path / "own.yaml"
+    own.write_text("loads:\n  buildings:\n    frame-a: {masses_kg: [2.0e+5, 1.5e+5], "
+                   "storey_stiffness_n_per_m: [6.0e+7, 3.0e+7]}\n")
+    out = _snakemake(ROOT, "results/figures/ida_frame-a.png", "results/figures/collapse_frame-a.png", "-n",
+                     "--forceall", "--configfile", "config/smoke.yaml", str(own)).stdout
+    for rule in ("loads_bare", "ida_bare", "collapse_bare"):
+        assert f"results/{rule.split('_')[0]}/runs/frame-a/bare.nc" in out, rule
+    for kind in DAMPER_KINDS:
+        assert f"results/ida/runs/frame-a/{kind}.nc" in out and f"results/collapse/runs/frame-a/{kind}.nc" in out
 
 
 def test_the_papers_scope_skips_exactly_the_stages_beyond_it():

@@ -13,7 +13,7 @@ rule collapse_bare:
     benchmark:
         "results/benchmarks/collapse_bare/{building}.tsv"
     wildcard_constraints:
-        building="s[0-9]+_T[0-9.]+",
+        building=BUILDING_IDS,
     conda:
         ENV
     threads: 1
@@ -38,7 +38,7 @@ rule collapse_damper:
     benchmark:
         "results/benchmarks/collapse_damper/{building}_{damper}.tsv"
     wildcard_constraints:
-        building="s[0-9]+_T[0-9.]+",
+        building=BUILDING_IDS,
         damper=ANY_KIND,
     conda:
         ENV
@@ -117,7 +117,7 @@ rule collapse_figure:
     benchmark:
         "results/benchmarks/collapse_figure/{building}.tsv"
     wildcard_constraints:
-        building="s[0-9]+_T[0-9.]+",
+        building=BUILDING_IDS,
     conda:
         ENV
     threads: 1

@@ -20,6 +20,7 @@ from impact.stages.numerics.plan import stability_families, work_precision_piece
 from impact.outputs.provenance import git_state
 from impact.stages.loads import plan as loads
 from impact.stages.buildings import buildings as stage_buildings
+from impact.stages.buildings import shared_keys, wildcard
 from impact.stages.ida import plan as ida
 from impact.stages.collapse import plan as collapse
 from impact.model.params import IMPACT_KINDS
@@ -44,7 +45,22 @@ def validate_naming_the_key(config, schema, what="config"):
         raise WorkflowError(
             f"{what} {where.lstrip('.') or '(top level)'}: {error.message}"
             + (f"\n  the key: {about}" if about and error.absolute_path else "")
+            + (YAML_NUMBER_HINT if _a_number_read_as_text(error) else "")
         ) from None
+
+
+#: YAML 1.1 (PyYAML) reads 2.0e5 as text: its exponent needs a sign
+YAML_NUMBER_HINT = "\n  YAML reads a number like 2.0e5 as text: write 2.0e+5 (the exponent signed) or 200000.0"
+
+
+def _a_number_read_as_text(error) -> bool:
+    if error.validator != "type" or not isinstance(error.instance, str):
+        return False
+    try:
+        float(error.instance)
+    except ValueError:
+        return False
+    return True
 
 
 validate_naming_the_key(config, os.path.join(workflow.current_basedir, "..", "schemas", "config.schema.yaml"))
@@ -145,6 +161,7 @@ LOADS = stage_config("loads")
 if LOADS:
     loads.check_config(LOADS)
 LOADS_BUILDINGS = list(stage_buildings(LOADS)) if LOADS else []
+BUILDING_IDS = wildcard(LOADS_BUILDINGS)  # the {building} wildcard of the loads, ida and collapse rules
 LOADS_FAMILIES = loads.families(LOADS) if LOADS else []
 LOADS_KINDS = list(DAMPER_KINDS)
 # incremental dynamic analysis: on the loads stage's buildings, with its damper designs
@@ -239,7 +256,7 @@ def loads_params(wildcards):
 def ida_params(wildcards):
     """What the stage's runs depend on: its section but the verdicts' and fits' settings, and the loads keys it uses."""
     kept = {key: value for key, value in IDA.items() if key not in ("verdict", "drift_limits")}
-    return {"ida": kept, "loads": {key: LOADS[key] for key in ida.LOADS_KEYS}}
+    return {"ida": kept, "loads": shared_keys(LOADS)}
 
 
 def collapse_params(wildcards):
@@ -248,7 +265,7 @@ def collapse_params(wildcards):
     return {
         "collapse": kept,
         "ida": {key: IDA[key] for key in collapse.IDA_KEYS},
-        "loads": {key: LOADS[key] for key in collapse.LOADS_KEYS},
+        "loads": shared_keys(LOADS),
     }
 
 

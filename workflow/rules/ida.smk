@@ -11,7 +11,7 @@ rule ida_bare:
     benchmark:
         "results/benchmarks/ida_bare/{building}.tsv"
     wildcard_constraints:
-        building="s[0-9]+_T[0-9.]+",
+        building=BUILDING_IDS,
     conda:
         ENV
     threads: 1
@@ -36,7 +36,7 @@ rule ida_damper:
     benchmark:
         "results/benchmarks/ida_damper/{building}_{damper}.tsv"
     wildcard_constraints:
-        building="s[0-9]+_T[0-9.]+",
+        building=BUILDING_IDS,
         damper=ANY_KIND,
     conda:
         ENV
@@ -123,7 +123,7 @@ rule ida_figure:
     benchmark:
         "results/benchmarks/ida_figure/{building}.tsv"
     wildcard_constraints:
-        building="s[0-9]+_T[0-9.]+",
+        building=BUILDING_IDS,
     conda:
         ENV
     threads: 1

@@ -11,7 +11,7 @@ rule loads_bare:
     benchmark:
         "results/benchmarks/loads_bare/{building}.tsv"
     wildcard_constraints:
-        building="s[0-9]+_T[0-9.]+",
+        building=BUILDING_IDS,
     conda:
         ENV
     threads: 1
@@ -35,7 +35,7 @@ rule loads_damper:
     benchmark:
         "results/benchmarks/loads_damper/{building}_{damper}.tsv"
     wildcard_constraints:
-        building="s[0-9]+_T[0-9.]+",
+        building=BUILDING_IDS,
         damper=ANY_KIND,
     conda:
         ENV

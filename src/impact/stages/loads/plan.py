@@ -11,7 +11,7 @@ from impact.model.params import G_GRAV, ParameterError
 from impact.model.records import kanai_tajimi, narrow_band_force
 from impact.model.scene import ForceRecord, GroundMotion
 from impact.model.suites import record_by_key
-from impact.stages.buildings import buildings
+from impact.stages.buildings import buildings, check_buildings
 
 FAMILIES = ("records", "kanai_tajimi", "wind")
 
@@ -82,6 +82,7 @@ def stage_loads(cfg: dict, building_name: str, building: Building) -> list[Load]
 
 def check_config(cfg: dict) -> None:
     """Checks of the loads section a JSON schema cannot express; the message names the key."""
+    check_buildings(cfg)
     names = buildings(cfg)
     if cfg["records"]["design_pga_g"] not in cfg["records"]["pga_g"]:
         raise ParameterError(f"loads.records.design_pga_g = {cfg['records']['design_pga_g']} must be one of "
