@@ -468,6 +468,11 @@ HELD_AT_SCALE = {
     # a floor's absolute acceleration in a record's first step, 2e-13 m/s^2 written with terms of 22 m/s^2: the
     # curvature bound could not settle it in the search's visits; the segment's series bounds it
     (2067450001, 2765): "uncertified peak",
+    # the same first step of a record on a 10-storey building with a TMD and twelve CID units, a drift of 2e-19 m
+    # written with terms of 2e-6 m, where the series could not help: the building's stiffest modes (|kap| T = 36)
+    # turn too far over the step for it.  Those terms (1e-23 m here) are now bounded one by one, the series
+    # takes the rest
+    (3297466453, 871): "uncertified peak",
 }
 #: ... and those that still break it: issue 42's open classes.  3761029462-2512: a pendulum tuned 400 times above the
 #: building in a 2e-5 m gap, no impact, the energy to 1.7e-9 (the modal tables' round-off beside a stiff mode);
@@ -597,7 +602,26 @@ def test_a_row_whose_terms_cancel_is_bounded_by_its_series():
     bound = _taylor_bound(kap, c, p, big_t)
     assert exact <= bound
     assert bound == pytest.approx(amp * (math.cosh(x) - 1 - x * x / 2), rel=0, abs=1e-12 * amp)
-    assert _taylor_bound(kap, c, p, 10.0) == np.inf  # 350 radians over the segment: no series
+    # 350 radians over the segment: the cosine's halves bounded alone (amp), the series takes the polynomial
+    assert _taylor_bound(kap, c, p, 10.0) == pytest.approx(amp + amp + amp * omega ** 2 * 10.0 ** 2 / 2, rel=1e-12)
+
+
+def test_a_term_too_fast_for_the_series_is_bounded_alone_and_the_rest_by_the_series():
+    """Probe scene 3297466453-871 (HELD_AT_SCALE): a drift cancelling to 2e-19 m in a record's first step beside
+    the building's stiffest mode (|kap| T = 36, too far a turn for the series), whose term was 1e-23 m.  The
+    fast term is bounded by its size, the cancelling ones by their series, and the row is certified."""
+    from impact.engine.events import TAYLOR_TURNS, _taylor_bound
+
+    amp, omega, big_t, stiff, tiny = 21.8, 35.0, 0.02, -3555.0, 1e-23
+    assert abs(stiff) * big_t > TAYLOR_TURNS
+    kap = np.array([stiff, 1j * omega, -1j * omega])
+    c = np.array([tiny, amp / 2, amp / 2], dtype=complex)
+    p = np.array([-amp - tiny, 0.0, amp * omega ** 2 / 2, 0.0])
+    t = np.linspace(0.0, big_t, 2001)
+    exact = np.max(np.abs(tiny * (np.exp(stiff * t) - 1) + amp * (np.cos(omega * t) - 1 + (omega * t) ** 2 / 2)))
+    bound = _taylor_bound(kap, c, p, big_t)
+    x = omega * big_t
+    assert exact <= bound == pytest.approx(amp * (math.cosh(x) - 1 - x * x / 2), rel=0, abs=1e-12 * amp)
 
 
 def test_an_escape_whose_first_derivatives_vanish_finds_the_return_through_its_wall():

@@ -34,6 +34,9 @@ from impact.engine.layout import MODE_LOCKED
 #: (F0/K * omega for the paper's system); far below any resolved rebound
 STICK_VELOCITY = 1e-8
 _ZERO_TOL = 1e-10  # relative size below which a derivative counts as zero
+#: contact tolerance of both loops, relative to the size of the gap function: a unit within it of its wall is on
+#: it, a relative speed within it of the row's scale is zero
+CONTACT_TOL = 1e-12
 
 
 @njit(cache=True)

@@ -417,17 +417,22 @@ def _taylor_bound(kap, c, p, big_t):
     (the absolute acceleration of a floor at rest, written as a relative and a ground part of metres per second
     squared each) bound it by what is left and by the coefficient's round-off, not by their own sizes, as the
     curvature bounds of the branch and bound do.  The series stops where what is left of it, the terms' sizes
-    |c_k| (|kap_k| T)^n / n! summed (each a geometric tail once n passes |kap_k| T), is below their round-off."""
+    |c_k| (|kap_k| T)^n / n! summed (each a geometric tail once n passes |kap_k| T), is below their round-off.
+    A term too fast for the series (|kap_k| T > TAYLOR_TURNS: a stiff mode, a unit's spring) is bounded alone,
+    by its largest size over [0, T]; where such terms are not small, the bound is loose and the search says so."""
     nk = kap.shape[0]
+    ck = c.copy()
     fastest = 0.0
     size = 0.0
+    fast = 0.0
     for k in range(nk):
-        fastest = max(fastest, abs(kap[k]))
-        size += abs(c[k])
+        if abs(kap[k]) * big_t > TAYLOR_TURNS:
+            fast += abs(c[k]) * max(1.0, math.exp(kap[k].real * big_t))
+            ck[k] = 0.0
+        else:
+            fastest = max(fastest, abs(kap[k]))
+            size += abs(c[k])
     x = fastest * big_t
-    if x > TAYLOR_TURNS:
-        return np.inf
-    ck = c.copy()
     bound = 0.0
     power = 1.0  # T^n / n!
     factorial = 1.0  # n!
@@ -444,14 +449,14 @@ def _taylor_bound(kap, c, p, big_t):
         bound += (abs(coef) + (PEAK_NOISE + (n + nk) * _EPS) * terms) * power
         power *= big_t / (n + 1)
         factorial *= n + 1
-        if n + 1 > 2.0 * x:
+        if n >= 3 and n + 1 > 2.0 * x:  # not before the polynomial's last term is in
             # the rest: sum over n' > n of |c_k| |kap_k|^n' T^n' / n!' <= (next term) / (1 - x / (n + 2))
             rest = 0.0
             for k in range(nk):
                 rest += abs(ck[k])
             rest *= power * 2.0
             if rest <= _EPS * size:
-                return bound + rest
+                return bound + rest + fast
     return np.inf
 
 

@@ -44,7 +44,7 @@ import numpy as np
 from numba import njit
 
 from impact.engine import layout as L
-from impact.engine.contact import event_cap_reached, floor_decision, plastic_end, stays
+from impact.engine.contact import CONTACT_TOL, event_cap_reached, floor_decision, plastic_end, stays
 from impact.engine.events import first_exit
 from impact.engine.segment import bound_tab, deriv_at0, kappa_powers
 
@@ -404,7 +404,7 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
         mode = L.MODE_LOCKED
     escape = 0
     escape_v = 0
-    if mode == L.MODE_FREE and side != 0 and abs(z[2] - z[0]) >= half * (1.0 - 1e-12) and d > 0.0:
+    if mode == L.MODE_FREE and side != 0 and abs(z[2] - z[0]) >= half * (1.0 - CONTACT_TOL) and d > 0.0:
         # a state just after an impact on wall `side` (e.g. a closed-form orbit)
         escape = side
     if fric is not None:
@@ -450,7 +450,7 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
             for k in range(NT):
                 cs[k] = cy[k] - cx[k]
             _halve(kap, cs)
-            delta = 1e-12 * (bound_tab(kpow, cs, _NO_POLY, 0, 0.0) + d)
+            delta = CONTACT_TOL * (bound_tab(kpow, cs, _NO_POLY, 0, 0.0) + d)
             _poly4(pp, poly[0], poly[1])
             first_exit(kap, kpow, cs, pp, -half, half, tau_max, escape, delta, ev)
             if fric is not None:
@@ -458,7 +458,7 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
                 for k in range(NT):
                     cq[k] = sigma * cs[k] * kap[k]
                 cq[6] += sigma * poly[0]
-                dv = 1e-12 * (bound_tab(kpow, cq, _NO_POLY, 0, 0.0) + 2.0 * abs(poly[1]))
+                dv = CONTACT_TOL * (bound_tab(kpow, cq, _NO_POLY, 0, 0.0) + 2.0 * abs(poly[1]))
                 _poly4(pp, 2.0 * sigma * poly[1], 0.0)
                 first_exit(kap, kpow, cq, pp, 0.0, np.inf, min(ev[0], tau_max), escape_v, dv, ev2)
                 diag[L.D_STEPS] += ev2[3]
@@ -471,7 +471,7 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
                 cq[k] = side * cx[k] * kap[k] * kap[k]
             _halve(kap, cq)
             level = -p[L.P_WP] ** 2 * half + a_f
-            delta = 1e-12 * (bound_tab(kpow, cq, _NO_POLY, 0, 0.0) + abs(level))
+            delta = CONTACT_TOL * (bound_tab(kpow, cq, _NO_POLY, 0, 0.0) + abs(level))
             # just stuck with the contact force at round-off from its limit: the
             # force is known to move away from it (see _stays_stuck)
             q0 = deriv_at0(kap, cq, _NO_POLY, 0)
@@ -482,7 +482,7 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
             for k in range(NT):
                 cq[k] = cx[k] * kap[k] * kap[k]
             _halve(kap, cq)
-            delta = 1e-12 * (bound_tab(kpow, cq, _NO_POLY, 0, 0.0) + a_f)
+            delta = CONTACT_TOL * (bound_tab(kpow, cq, _NO_POLY, 0, 0.0) + a_f)
             q0 = deriv_at0(kap, cq, _NO_POLY, 0)
             esc = 0
             if a_f - abs(q0) < delta:
@@ -589,7 +589,7 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
                 cs[k] = cy[k] - cx[k]
             push = side * (deriv_at0(kap, cs, _NO_POLY, 2) + 2.0 * poly[1])
             rebound = z[3] - z[1]
-            tol = 1e-12 * (bound_tab(kpow, cs, _NO_POLY, 0, 0.0) + d)
+            tol = CONTACT_TOL * (bound_tab(kpow, cs, _NO_POLY, 0, 0.0) + d)
             if push > 0.0 and rebound * rebound < 2.0 * tol * push:
                 _stick(z, p, diag)
                 stuck = True

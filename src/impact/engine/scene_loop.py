@@ -47,6 +47,7 @@ from impact.engine.bundles import (
     borrowed,
 )
 from impact.engine.contact import (
+    CONTACT_TOL,
     event_cap_reached,
     floor_decision,
     floor_mass,
@@ -153,7 +154,6 @@ from impact.engine.segment import (
     storey_gravity,
 )
 
-_TOL = 1e-12  # contact tolerance, relative to the size of the gap function
 _ROUND_TOL = 1e-13  # 450 eps: the round-off of a difference of rows, relative to their terms' size
 
 
@@ -199,11 +199,11 @@ def _gap_row(C, P, nf, j, f, cs, ps):
 
 @njit(cache=True, inline='always')
 def _contact_tol(gap, row_bound, floor_size):
-    """A unit's contact tolerance: _TOL of its gap row's terms and gap, but never below _ROUND_TOL of the
+    """A unit's contact tolerance: CONTACT_TOL of its gap row's terms and gap, but never below _ROUND_TOL of the
     unit's and its floor's own rows, since the gap row is their difference and is rounded on their size
     (a 1e-7 m gap on a floor moving 1e-2 m is resolved to 1e-18 m, not to round-off of 1e-7 m).  The unit's
     row is at most the floor's plus the gap row's, so the floor's size (from _gap_row) is all it needs."""
-    return max(_TOL * (row_bound + gap), _ROUND_TOL * (2.0 * floor_size + row_bound))
+    return max(CONTACT_TOL * (row_bound + gap), _ROUND_TOL * (2.0 * floor_size + row_bound))
 
 
 @njit(cache=True)
@@ -228,7 +228,7 @@ def _still_leaving(j, nf, units, mode, escape, q, v):
     f = units.floor[j]
     half = 0.5 * units.gap[j]
     # to the contact tolerance of the gap and of the positions it is the difference of
-    on_wall = abs(q[nf + j] - q[f] - escape[j] * half) <= _TOL * (units.gap[j] + abs(q[nf + j]) + abs(q[f]))
+    on_wall = abs(q[nf + j] - q[f] - escape[j] * half) <= CONTACT_TOL * (units.gap[j] + abs(q[nf + j]) + abs(q[f]))
     return on_wall and escape[j] * (v[nf + j] - v[f]) <= 0.0
 
 
@@ -336,7 +336,7 @@ def search_events(w, nf, units, springs, fric, tau_max, r0, r1, ek_tau):
                         cq[k] = sigma[j] * cq[k]
                     for k in range(NPOLY):
                         pq[k] = sigma[j] * pq[k]
-                    dv = _TOL * bound_tab(kpow, cq, pq, 0, 0.0)
+                    dv = CONTACT_TOL * bound_tab(kpow, cq, pq, 0, 0.0)
                     first_exit(kap, kpow, cq, pq, 0.0, np.inf, best, escape_v[j], dv, out)
                     diag[D_STEPS] += out[3]
                     best = _earliest(out, best, False, j, EV_SLIDE_STOP, 0, ev_t, ev_side, ev_kind)
@@ -344,7 +344,7 @@ def search_events(w, nf, units, springs, fric, tau_max, r0, r1, ek_tau):
             stuck_row(kap, C, P, f, side[j], uload[j] * r0, uload[j] * r1,
                       _unit_level(j, units, springs, fric), cq, pq)
             halve_from_start(kap, cq, pq, wt)
-            delta = _TOL * bound_tab(kpow, cq, pq, 0, 0.0)
+            delta = CONTACT_TOL * bound_tab(kpow, cq, pq, 0, 0.0)
             q0 = deriv_at0(kap, cq, pq, 0)
             esc = 1 if -q0 < delta else 0
             first_exit(kap, kpow, cq, pq, -np.inf, 0.0, best, esc, delta, out)
@@ -356,7 +356,7 @@ def search_events(w, nf, units, springs, fric, tau_max, r0, r1, ek_tau):
                 a_f = fric[j]
                 floor_row(kap, C, P, f, uload[j] * r0, uload[j] * r1, cq, pq)
                 halve_from_start(kap, cq, pq, wt)
-                delta = _TOL * (bound_tab(kpow, cq, pq, 0, 0.0) + a_f)
+                delta = CONTACT_TOL * (bound_tab(kpow, cq, pq, 0, 0.0) + a_f)
                 q0 = deriv_at0(kap, cq, pq, 0)
                 esc = 0
                 if a_f - abs(q0) < delta:
@@ -447,7 +447,7 @@ def search_storeys(w, yld, horizon, ek_tau):
                 cq[k] = sign * cq[k]
             for k in range(NPOLY):
                 pq[k] = sign * pq[k]
-            dv = _TOL * bound_tab(kpow, cq, pq, 0, 0.0)
+            dv = CONTACT_TOL * bound_tab(kpow, cq, pq, 0, 0.0)
             if escape_v[i] == 0 and horizon == ek_tau and _clear_of_walls(kpow, ek, cq, pq, 0.0, np.inf, horizon, dv):
                 out[0] = np.inf
                 out[3] = 1.0
@@ -561,7 +561,7 @@ def _on_surface(yld, i, q):
     """Storey i's elastic drift on the yield surface it left (yld.escape), to the contact tolerance of its floors."""
     u = storey_drift(q, i)
     lower = abs(q[i - 1]) if i > 0 else 0.0
-    return abs(u - yld.offset[i] - yld.escape[i] * yld.yield_drift[i]) <= _TOL * (yld.yield_drift[i] + abs(q[i])
+    return abs(u - yld.offset[i] - yld.escape[i] * yld.yield_drift[i]) <= CONTACT_TOL * (yld.yield_drift[i] + abs(q[i])
                                                                                     + lower)
 
 
