@@ -372,7 +372,7 @@ def cmd_quake(args) -> dict:
         raise ParameterError(f"--floor = {args.floor} is out of range: allowed [1, the building's {building.storeys} "
                              "storeys]")
     flags = _quake_damper_flags(args)
-    if args.damper == "tmd":
+    if args.damper != "none" and not KINDS[args.damper].walls:
         flags = _tmd_design(args, flags, building)
     dampers = ()
     if args.damper != "none":
@@ -527,9 +527,9 @@ def _design_equations(args) -> dict:
     from impact.stages.design.equations.formulas import Point, evaluate, tmd_equations
 
     kind = args.damper or "cid"
-    if kind == "tmd":
+    if not KINDS[kind].walls:
         return tmd_equations(args.mu, args.beta)
-    answer = evaluate(kind, Point(args.mu, args.e, args.beta, args.rp if kind == "pid" else 0.0))
+    answer = evaluate(kind, Point(args.mu, args.e, args.beta, args.rp if KINDS[kind].spring else 0.0))
     try:
         chart = load_charts(args.charts or _default_charts(), (kind,))[kind]
     except ParameterError:
@@ -554,7 +554,7 @@ def _chart_optimum(chart, answer: dict) -> dict | None:
 
 def _equations_text(a: dict) -> str:
     """The design equation's answer as a person reads it."""
-    if a["damper"] == "tmd":
+    if not KINDS[a["damper"]].walls:
         return (f"TMD, mu = {a['mu']:g}: Den Hartog's tuning f = {a['tuning']:.4f}, damping beta_t = "
                 f"{a['damping']:.4f}; X_m there {a['X_m']:.4f} (exact, linear closed form)")
     lines = [f"{a['damper'].upper()}, mu = {a['mu']:g}, e = {a['e']:g}, beta = {a['beta']:g}"
@@ -573,7 +573,7 @@ def _equations_text(a: dict) -> str:
 
 def _design_text(a: dict) -> str:
     """The answer as a person reads it, with the `impact sweep` flags that rerun it."""
-    if a["damper"] == "tmd":
+    if not KINDS[a["damper"]].walls:
         what = f"TMD, mu = {a['mu']:g}, tuning f = {a['tuning']:.4f}, damping beta_t = {a['damping']:.4f}"
         again = ""
     else:

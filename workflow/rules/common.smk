@@ -24,6 +24,7 @@ from impact.stages.buildings import shared_keys, wildcard
 from impact.stages.ida import plan as ida
 from impact.stages.collapse import plan as collapse
 from impact.model.params import IMPACT_KINDS
+from impact.model.kinds import kind_of
 from impact.model.scene import DAMPER_KINDS
 from impact.stages.design import chart_specs
 from impact.stages.robustness.designs import design_names
@@ -271,7 +272,7 @@ def collapse_params(wildcards):
 
 def ida_design(wildcards):
     """The earthquake study's damper run whose design gap ratio an impact damper takes (none for the TMD)."""
-    if wildcards.damper == "tmd":
+    if not kind_of(wildcards.damper).walls:
         return []
     return expand(rules.loads_damper.output[0], building=wildcards.building, damper=wildcards.damper)
 

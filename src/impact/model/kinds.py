@@ -69,6 +69,11 @@ def impact_kinds() -> tuple[str, ...]:
     return kinds_with("walls")
 
 
+def linear_kinds() -> tuple[str, ...]:
+    """The kinds without walls: their units never strike, so a run with them alone is linear in its load."""
+    return tuple(name for name, k in KINDS.items() if not k.walls)
+
+
 def sliding_kinds() -> str:
     """The kinds whose mass may slide on its floor, as a message names them ('cid', or 'cid' or 'x')."""
     return either(map(repr, kinds_with("slides")))

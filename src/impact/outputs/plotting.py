@@ -11,6 +11,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from impact.model.kinds import damper_kinds, kind_of  # noqa: E402
 from impact.model.params import curve_id  # noqa: E402
 from impact.outputs.files import atomic_path  # noqa: E402
 from impact.outputs.labels import TOO_SLOW  # noqa: E402
@@ -22,7 +23,7 @@ START_STYLE = {"centre": "-", "left": ":", "right": "--"}
 
 def curve_label(spec: dict) -> str:
     parts = [spec["damper"].upper(), f"μ={spec['mu']:g}", f"e={spec['e']:g}"]
-    if spec["damper"] == "pid":
+    if kind_of(spec["damper"]).spring:
         parts.append(f"r'={spec['rp']:g}")
     if spec.get("nu", 0.0):
         parts.append(f"ν={spec['nu']:g}")
@@ -471,7 +472,7 @@ def plot_design_charts(charts: dict, outputs) -> None:
 
 LOAD_COLUMNS = (("records", None, "the four records (mean)"), ("kanai_tajimi", "firm", "Kanai-Tajimi, firm (mean)"),
                 ("kanai_tajimi", "soft", "Kanai-Tajimi, soft (mean)"))
-DAMPER_COLORS = {"cid": "C0", "pid": "C1", "tmd": "C2"}
+DAMPER_COLORS = {kind: f"C{i}" for i, kind in enumerate(damper_kinds())}  # each kind its colour, in the registry's order
 
 
 def plot_loads_reduction(datasets: dict, outputs) -> None:

@@ -3,6 +3,7 @@ configuration.  Nothing here runs the engine."""
 
 from __future__ import annotations
 
+from impact.model.kinds import linear_kinds
 from impact.model.params import ParameterError
 from impact.model.records import RecordError
 from impact.model.scene import DAMPER_KINDS
@@ -13,7 +14,7 @@ from impact.stages.buildings import buildings
 #: the cases of one building: the bare building, then each damper type
 KINDS = ("bare", *DAMPER_KINDS)
 #: the cases linear on an elastic building, run once at Sa(T1) = 1 g and scaled to every level
-LINEAR = ("bare", "tmd")
+LINEAR = ("bare", *linear_kinds())
 
 
 def scales_linearly(building, kind: str) -> bool:

@@ -12,6 +12,7 @@ from impact.closed_form.tmd import tuned_for
 from impact.engine.run import simulate
 from impact.engine.spectra import spectral_acceleration
 from impact.model.building import Building
+from impact.model.kinds import kind_of
 from impact.model.params import G_GRAV
 from impact.model.records import Record
 from impact.model.scene import GroundMotion, Scene
@@ -105,7 +106,7 @@ def designed_damper(loads: dict, building: Building, kind: str, mass_ratio: floa
                     peak: float):
     """The earthquake study's design of one damper: a TMD Den Hartog-tuned to the first mode; an impact damper with
     the clearance its design gap ratio times the bare building's median peak roof displacement at the design level."""
-    if kind == "tmd":
+    if not kind_of(kind).walls:
         return tuned_for(building, mass_ratio)
     return impact_damper(kind, building, mass_ratio, gap_ratios[mass_ratio] * peak, loads["e"])
 
@@ -128,7 +129,7 @@ def damper_runs(cfg: dict, loads: dict, building_name: str, kind: str, bare: xr.
                                linear=scales_linearly(building, kind))
                    for key in records]
         part = _stack(columns, list(records), levels)
-        if kind != "tmd":
+        if kind_of(kind).walls:
             part["gap"] = ((), damper.gap, {"long_name": "clearance of each impact damper unit", "units": "m"})
             part["gap_ratio"] = ((), gap_ratios[mr], {"long_name": "clearance over the bare building's median peak "
                                                                    "roof displacement at the design level",

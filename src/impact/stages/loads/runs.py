@@ -11,6 +11,7 @@ import xarray as xr
 from impact.closed_form.tmd import tuned_for
 from impact.engine.run import simulate
 from impact.model.building import Building
+from impact.model.kinds import kind_of
 from impact.model.scene import Damper, GroundMotion, Scene
 from impact.model.suites import record_by_key
 from impact.outputs.datasets import time_history_dataset
@@ -74,7 +75,7 @@ def damper_runs(cfg: dict, building_name: str, kind: str, bare: xr.Dataset) -> x
     loads = stage_loads(cfg, building_name, building)
     rows = []
     for mr in cfg["mass_ratios"]:
-        if kind == "tmd":
+        if not kind_of(kind).walls:
             rows += [row(ld, run(building, (tuned_for(building, mr),), ld), mass_ratio=mr) for ld in loads]
             continue
         swept = [ld for ld in loads if ld.family != "kanai_tajimi"]
@@ -110,7 +111,7 @@ def _at_design(ds: xr.Dataset, bare: xr.Dataset, kind: str) -> xr.Dataset:
             part = part.sel(gap_ratio=best).drop_vars("gap_ratio")
             out[f"{family}_design_gap_ratio"] = best.assign_attrs(long_name=f"gap ratio of the design, {family} loads",
                                                            units="1")
-        elif kind != "tmd":
+        elif kind_of(kind).walls:
             out[f"{family}_design_gap_ratio"] = out["records_design_gap_ratio"].assign_attrs(
                 long_name=f"gap ratio of the design, {family} loads (the records' best)")
         for name in names:
