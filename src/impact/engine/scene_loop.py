@@ -718,8 +718,9 @@ def _shift_row(kap, c, p, a, cs, ps):
 
 
 @njit(cache=True, inline='always')
-def monitor_modal(w, s, n, tau, t, t_win, monitors, r0, r1, harmonic, yielding):
-    """Certified peaks of every monitor over the segment, and the roof's square integrated over the window.
+def monitor_modal(w, s, n, tau, t, t_win, monitors, ramp, harmonic, yielding):
+    """Certified peaks of every monitor over the segment, and the roof's square integrated over the window;
+    ramp: (r0, r1), the record's value at the segment's start and its slope.
 
     Rows and curvature bounds come from the modal tables: a segment whose ends
     and bound cannot beat the running peak is settled without the search, as
@@ -729,6 +730,7 @@ def monitor_modal(w, s, n, tau, t, t_win, monitors, r0, r1, harmonic, yielding):
     kap, kpow, ek, cm, pm, stack, wt, diag = w.kap, w.kpow, w.ek, w.cm, w.pm, w.stack, w.wt, w.diag
     mon_peak, mon_peak_t = w.mon_peak, w.mon_peak_t
     mon_rows, mon_cap = monitors.rows, monitors.cap
+    r0, r1 = ramp
     for m in range(mon_rows.shape[0]):
         if m != 0 and mon_peak[m] >= mon_cap[m]:
             continue
@@ -1386,7 +1388,7 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
             # modal tables assume; and beside a stiff pendulum the tables lost 3e-9 of a probe scene's energy
             # balance on the yielding branches, the rows 2.6e-10 (tests/test_exactness.py, yielding probe 97)
             integrate_segment(w, tau, building, units, springs, harm, record, (theta0, r0, r1))
-        monitor_modal(w, s, n, tau, t, p[P_TWIN], monitors, r0, r1, harm is not None, yld is not None)
+        monitor_modal(w, s, n, tau, t, p[P_TWIN], monitors, (r0, r1), harm is not None, yld is not None)
         if its < ts.shape[0]:
             its = sample_segment(kap, C, P, t, tau, ts, its, samples, qs, vs)
         move_to_end(w, building, units, springs, fric, yld, tau)
