@@ -138,8 +138,9 @@ class System:
                      frequency_hz="(0, 1e6]", unit_m="(0, 1e6]")
         kind = KINDS[self.kind]
         if kind.spring:
-            # a scene's bounds (model.scene.Damper), named as the paper names the tuning
-            check_fields(self, rp=f"[{MIN_TUNING:g}, {MAX_TUNING:g}]")
+            # a scene's upper bound (model.scene.Damper), named as the paper names the tuning; below MIN_TUNING the
+            # paper's own loop still runs a softening pendulum (its limit, the CID, is a test of that loop)
+            check_fields(self, rp=f"(0, {MAX_TUNING:g}]")
         if not kind.spring and self.rp != 0.0:
             raise ParameterError(f"rp = {self.rp!r} is not allowed for kind {self.kind!r}: the CID has no pendulum")
         if not kind.slides and self.nu != 0.0:
