@@ -410,8 +410,8 @@ def _unsearched_bound(kap, c, p, stack, top, m2):
 
 @njit(cache=True)
 def _taylor_bound(kap, c, p, big_t):
-    """A bound of |h| over [0, T] from its Taylor series at 0 (inf where the fastest mode turns by more than
-    TAYLOR_TURNS radians over T, and the series would need too many terms).
+    """A bound of |h| over [0, T] from its Taylor series at 0, over the modes turning by at most TAYLOR_TURNS
+    radians over T, and the faster ones bounded each by its size (inf if the series does not settle).
 
     Each coefficient is summed over the terms and the polynomial before its size is taken, so terms that cancel
     (the absolute acceleration of a floor at rest, written as a relative and a ground part of metres per second
