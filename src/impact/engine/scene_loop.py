@@ -1089,9 +1089,12 @@ def _follow_floor_jolts(nf, units, fric, st, jolted):
             mode[j] = MODE_FREE
             sigma[j] = 1 if v[nf + j] > v[f] else -1
             escape_v[j] = 0
-        elif mode[j] == MODE_FREE and escape[j] * (v[nf + j] - v[f]) > 0.0:
+        elif mode[j] == MODE_FREE and escape[j] * (v[nf + j] - v[f]) > CONTACT_TOL * (abs(v[nf + j]) + abs(v[f])):
             # leaving a wall, and the floor's jolt drives it back into that wall: no longer leaving, so the
-            # search finds the strike at once rather than after it has passed through the wall
+            # search finds the strike at once rather than after it has passed through the wall.  A drive within
+            # the contact tolerance of the speeds is round-off (another unit's strike at a speed of one ulp jolts
+            # the floor by one ulp): turned back by it, two groups just released on one floor handed such a
+            # strike to each other without end (probe scene 3297466453-2244)
             escape[j] = 0
             if fric is not None and fric[j] > 0.0:
                 sigma[j] = 1 if v[nf + j] > v[f] else -1
