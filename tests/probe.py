@@ -160,12 +160,22 @@ def _sampled_peaks(scene: Scene, q: np.ndarray) -> np.ndarray:
     return np.array([np.max(np.abs(r)) for r in rows])
 
 
+def _stop(scene: Scene, diag: dict) -> str:
+    """Why and where a run stopped early, in words ('event cap' or 'stall guard' first), with the unit's restitution
+    and gap: a unit of e = 1 in a gap of nanometres reaches the cap by its nature, not by a defect."""
+    if diag["stop_unit"] >= 0:
+        _, damper = scene.unit_list()[diag["stop_unit"]]
+        return (f"{diag['stopped_by']} at a {diag['stop_event']} of unit {diag['stop_unit']}: e = {damper.e:.2f}, "
+                f"gap {damper.gap:.1e} m")
+    return f"{diag['stopped_by']} at a {diag['stop_event']} of storey {diag['stop_storey']}"
+
+
 def violations(scene: Scene, scale: float, result) -> list[str]:
     """Every promise the run broke: finished, finite, energy, penetration, no dense sample above a peak."""
     diag = result.diagnostics
     found = []
     if diag["event_cap_reached"]:
-        found.append("event cap")
+        found.append(_stop(scene, diag))
     if not np.all(np.isfinite(result.final_q)) or not math.isfinite(result.peak_roof_displacement):
         found.append("non-finite result")
     if not abs(diag["energy_residual"]) <= ENERGY_TOL + SEGMENT_ROUNDOFF * diag["segments"]:
