@@ -45,12 +45,6 @@ MAX_TUNING = 100.0
 #: beyond the 1e-9 to which every run balances; tools/tuning_bounds.py); a 10-storey building with a TMD of 0.04: 3.9e-9 with no
 #: impact at all.  A PID or TMD tuned ten times below the building's fundamental damps nothing of it.
 MIN_TUNING = 0.1
-#: a run's events in one period (of the paper's forcing, or of a scene's fundamental) past which it stops, flagged
-#: (event_cap_reached, with the unit and contact it stopped at): a bound on its cost, not a limit of the physics.
-#: The study's runs make tens; a unit of e = 1 in a gap of nanometres makes millions, each resolved exactly, at 16
-#: to 30 us an event on a 9-storey building (probe scenes 3771293586-2563 and -2009: 2563 ran 438 s to its end,
-#: 28 million impacts).  At this bound those stop in 9 and 6 s; raise it for a run that must go on
-MAX_EVENTS_PER_PERIOD = 20_000
 
 
 def _check(name: str, value: float, lo: float, hi: float, *, lo_open=False, hi_open=False) -> float:
@@ -193,7 +187,7 @@ class Protocol:
     periods: float = 500.0
     average_from: float = 250.0
     start: str = "centre"
-    max_events_per_period: int = MAX_EVENTS_PER_PERIOD
+    max_events_per_period: int = 20000
     extra: dict = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self):
