@@ -511,6 +511,11 @@ OPEN_AT_SCALE = {
     # 1.02e-9).  The same building's storeys 4, 16 and 64 times stiffer (fundamental 1.46, 2.92, 5.83 rad/s, damping
     # ratios kept): 2.1e-11, -9.4e-12, -3.4e-13
     (241827560, 1462): "energy residual",
+    # the class on yielding buildings with P-delta, found by the probe of 5d7fbde: a 10-storey building whose weakest
+    # storey keeps 0.54 % of its stiffness under gravity (fundamental 0.149 rad/s), energy to -1.94e-6; an 8-storey
+    # perfectly plastic one keeping 2.3 % (0.27 rad/s), 2.2e-8, and a dense sample 2.5e-8 above a certified peak,
+    # as 2905's
+    (868342599, 1178): "energy residual", (868342599, 2854): "sample above a certified peak",
 }
 #: scenes the probe at scale found that the model now refuses by name: a PID or TMD tuned outside
 #: [MIN_TUNING, MAX_TUNING].  3038120592-2847 (energy to 3.7e-7) broke through its TMD of tuning 0.040 (alone on
