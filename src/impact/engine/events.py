@@ -410,16 +410,14 @@ def _unsearched_bound(kap, c, p, stack, top, m2):
 
 
 @njit(cache=True)
-def _shifted(kap, c, p, a):
-    """The row's terms and polynomial seen from tau = a: h(a + s) = sum c_k e^{kap_k a} e^{kap_k s} + sum q_n s^n."""
-    ck = c * np.exp(kap * a)
-    q = np.zeros(4)
-    for n in range(4):
-        binom = 1.0
-        for m in range(n, 4):
-            q[n] += p[m] * binom * a ** (m - n)
-            binom = binom * (m + 1) / (m + 1 - n)
-    return ck, q
+def shift_row(kap, c, p, a, cs, ps):
+    """The row h(a + tau) as a row in tau (cs, ps: its terms and polynomial)."""
+    for k in range(kap.shape[0]):
+        cs[k] = c[k] * np.exp(kap[k] * a)
+    ps[0] = p[0] + a * (p[1] + a * (p[2] + a * p[3]))
+    ps[1] = p[1] + a * (2.0 * p[2] + 3.0 * a * p[3])
+    ps[2] = p[2] + 3.0 * a * p[3]
+    ps[3] = p[3]
 
 
 @njit(cache=True)
@@ -436,13 +434,15 @@ def _split_taylor_bound(kap, c, p, big_t):
         size += abs(c[k]) * max(1.0, math.exp(kap[k].real * big_t))
     for n in range(4):
         size += abs(p[n]) * big_t ** n
+    cs = np.empty_like(c)
+    ps = np.empty(4)
     pieces = 2
     while pieces <= TAYLOR_PIECES:
         width = big_t / pieces
         worst = 0.0
         for i in range(pieces):
-            ck, q = _shifted(kap, c, p, i * width)
-            worst = max(worst, _taylor_bound(kap, ck, q, width))
+            shift_row(kap, c, p, i * width, cs, ps)
+            worst = max(worst, _taylor_bound(kap, cs, ps, width))
         best = min(best, worst + PEAK_NOISE * size)
         pieces *= 2
     return best

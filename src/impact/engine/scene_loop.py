@@ -57,7 +57,7 @@ from impact.engine.contact import (
     stays,
     stuck_row,
 )
-from impact.engine.events import PEAK_RTOL, first_exit, peak_abs
+from impact.engine.events import PEAK_RTOL, first_exit, peak_abs, shift_row
 from impact.engine.layout import (
     BRANCH_ELASTIC,
     D_CAP,
@@ -706,17 +706,6 @@ def step_tables(s, key, tau, dt, kap, ek, pair, single, dtab):
             pair[k, l] = dpair[s, k, l]
 
 
-@njit(cache=True)
-def _shift_row(kap, c, p, a, cs, ps):
-    """The row h(a + tau) as a row in tau."""
-    for k in range(kap.shape[0]):
-        cs[k] = c[k] * np.exp(kap[k] * a)
-    ps[0] = p[0] + a * (p[1] + a * (p[2] + a * p[3]))
-    ps[1] = p[1] + a * (2.0 * p[2] + 3.0 * a * p[3])
-    ps[2] = p[2] + 3.0 * a * p[3]
-    ps[3] = p[3]
-
-
 @njit(cache=True, inline='always')
 def monitor_modal(w, s, n, tau, t, t_win, monitors, ramp, harmonic, yielding):
     """Certified peaks of every monitor over the segment, and the roof's square integrated over the window;
@@ -763,7 +752,7 @@ def window_square(w, tau, t, t_win, yielding):
     start = max(t_win - t, 0.0)
     if start > 0.0:
         # the one segment that the window's start cuts: tables of its own
-        _shift_row(kap, cm, pm, start, cs, ps)
+        shift_row(kap, cm, pm, start, cs, ps)
         rest = tau - start
         ek_w = np.exp(kap * rest)
         pair_w = np.empty_like(pair)
