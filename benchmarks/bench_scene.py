@@ -31,8 +31,8 @@ from pathlib import Path
 
 import numpy as np
 from numba import njit
-from scipy.linalg import expm
 
+from impact.closed_form.propagator import first_order_hold
 from impact.engine.paper import simulate
 from impact.engine.scenes import simulate_scene
 from impact.model.building import Building
@@ -50,24 +50,6 @@ def best_time(fun, repeats: int):
         out = fun()
         times.append(time.perf_counter() - t0)
     return min(times), out
-
-
-def first_order_hold(building: Building, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(A, B0, B1) of x = (q, q') under M q'' + C q' + K q = -M 1 a(t), a linear over each step of dt.
-
-    One exponential of the system augmented by the input and its slope (Van Loan): x(dt) = E11 x + E12 a_k +
-    E13 (a_{k+1} - a_k) / dt."""
-    n = building.storeys
-    m_inv = np.diag(1.0 / building.masses)
-    f = np.block([[np.zeros((n, n)), np.eye(n)], [-m_inv @ building.stiffness, -m_inv @ building.damping]])
-    g = np.concatenate([np.zeros(n), -np.ones(n)])
-    aug = np.zeros((2 * n + 2, 2 * n + 2))
-    aug[:2 * n, :2 * n] = f
-    aug[:2 * n, 2 * n] = g
-    aug[2 * n, 2 * n + 1] = 1.0
-    e = expm(aug * dt)
-    b1 = e[:2 * n, 2 * n + 1] / dt
-    return e[:2 * n, :2 * n].copy(), e[:2 * n, 2 * n] - b1, b1
 
 
 @njit(cache=True)

@@ -1,4 +1,5 @@
-"""Answers without simulation: Masri's two-impacts-per-cycle orbit and its stability, the TMD's optimum.
+"""Answers without simulation: Masri's two-impacts-per-cycle orbit and its stability, the TMD's optimum, a linear
+building's exact discrete propagator under a record.
 
 The public names load on first use (``__init__.pyi`` lists them).
 """
