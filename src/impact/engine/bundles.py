@@ -70,12 +70,13 @@ ConfigCache = namedtuple("ConfigCache", "key size lam vec vinv kinv damping dof 
 #: each monitor's modal coefficients and curvature bound
 ModalTables = namedtuple("ModalTables", "key gvis lmod mvec mbnd")
 
-#: a record's whole sample step per slot (scene_loop.step_tables): key, exp(kap dt), integral tables
-StepTables = namedtuple("StepTables", "key ek pair single")
+#: a record's whole sample step per slot (scene_loop.step_tables): key, exp(kap dt), integral tables (the ramp
+#: form's too: segment.ramp_tables)
+StepTables = namedtuple("StepTables", "key ek pair single ramp")
 
 #: a segment in coefficient form (rows C, P over the exponents kap) with exp(kap tau), the integral
-#: tables over tau and |kap|^n
-Segment = namedtuple("Segment", "kap C P ek pair single kpow")
+#: tables over tau (single's columns: segment.SINGLE_COLUMNS; ramp: segment.ramp_tables) and |kap|^n
+Segment = namedtuple("Segment", "kap C P ek pair single ramp kpow")
 
 #: scratch rows: gap and contact rows (cs ps, cq pq), a monitor's row (cm pm), velocity rows (cv pv),
 #: and two work rows (cu pu)
@@ -123,7 +124,7 @@ class SegmentWork(structref.StructRefProxy):
 
     A structref travels as one reference, and a step counts a reference only for each field it reads; a
     namedtuple counts one for every array it holds, which made bundling these steps cost 8 to 31 %.  The
-    fields: the segment (kap C P ek pair single kpow), the scratch rows (Rows), the vectors the steps use
+    fields: the segment (kap C P ek pair single ramp kpow), the scratch rows (Rows), the vectors the steps use
     (the peak search's stack, an event search's output, reduced-size scratch cu1, |modal amplitudes| aw,
     offsets before the segment, mode weights wt), each unit's next event (ev_t ev_side ev_kind),
     build_segment's scratch, the modal tables, the configuration cache, the load vector, the run's state
@@ -133,7 +134,7 @@ class SegmentWork(structref.StructRefProxy):
     """
 
 
-SEGMENT_WORK_FIELDS = ("kap C P ek pair single kpow cs ps cq pq cm pm cv pv cu pu stack found cu1 aw s_before wt "
+SEGMENT_WORK_FIELDS = ("kap C P ek pair single ramp kpow cs ps cq pq cm pm cv pv cu pu stack found cu1 aw s_before wt "
                        "ev_t ev_side ev_kind cache load_vec mode side sigma offset escape escape_v q v "
                        "diag mon_peak mon_peak_t mon_x2 " + FLAT_FIELDS + " owner").split()
 structref.define_proxy(SegmentWork, SegmentWorkType, SEGMENT_WORK_FIELDS)

@@ -258,16 +258,15 @@ def square_integral(c, p, wt, pair, single, big_t):
 def integrate_modal(w, s, n, tau, units, record, r0, r1):
     """Exact work of a record load, viscous dissipation and stuck time over [0, tau], from the modal tables.
 
-    w.wf, w.wc: build_segment's scratch, with the modal amplitudes w in wc[2n:4n] and the particular
-    solution's (constant) reduced velocities u1 in wf[2n:3n]; cu1: scratch of the reduced size;
-    wt: the segment's mode weights (mode_weights), which halve the sums over k;
-    pair, single: integral_tables over tau; pu: (2, NPOLY) scratch; all of them fields of w (bundles.SegmentWork).
+    w.wc: build_segment's scratch, with the modal amplitudes w in wc[2n:4n]; w.v: the state's velocities at the
+    segment's start; cu1: scratch of the reduced size; wt: the segment's mode weights (mode_weights), which halve
+    the sums over k; single, ramp: integral_tables and ramp_tables over tau; pu: (2, NPOLY) scratch; all of them
+    fields of w (bundles.SegmentWork).
     """
     cu1, wt, mode, load_vec, P, pu, diag = w.cu1, w.wt, w.mode, w.load_vec, w.P, w.pu, w.diag
-    pair, single, gvis, lmod, lam, vec, cred = w.pair, w.single, w.gvis, w.lmod, w.lam, w.vec, w.damping
-    wf, wc = w.wf, w.wc
+    ramp, single, gvis, lmod, lam, vec, cred = w.ramp, w.single, w.gvis, w.lmod, w.lam, w.vec, w.damping
+    wc, v, dof = w.wc, w.v, w.dof
     W = 2 * n
-    U1 = 2 * n
     if tau > 0.0:
         if record is not None:
             # work: f = r0 + r1 tau against l^T v, the modal part, then the polynomial parts of every row
@@ -287,22 +286,24 @@ def integrate_modal(w, s, n, tau, units, record, r0, r1):
                     pu[0, 1] += li * 2.0 * P[i, 2]
                     pu[0, 2] += li * 3.0 * P[i, 3]
             diag[D_WORK] += acc.real + poly_integral(pu[0], pu[1], tau)
-        # viscous dissipation of v_r = V diag(kap) w exp(kap tau) + u1 in the reduced damping C_r
+        # viscous dissipation of v_r = v0 + sum_k V_k kap_k w_k (exp(kap_k tau) - 1) in the reduced damping C_r:
+        # the ramp form (segment.ramp_tables), from the state's velocities v0, not the modes' and the particular
+        # solution's, which cancel to them (to the square of that in a product)
         quad = 0.0 + 0.0j
         for k in range(2 * n):
             if wt[k] == 0.0:
                 continue
             inner = 0.0 + 0.0j
             for l in range(2 * n):
-                inner += gvis[s, k, l] * pair[k, l] * wc[W + l]
+                inner += gvis[s, k, l] * ramp[k, l] * wc[W + l]
             quad += wt[k] * wc[W + k] * inner
         steady = 0.0
         for a in range(n):
             ca = 0.0
             for b in range(n):
-                ca += cred[s, a, b] * wf[U1 + b]
+                ca += cred[s, a, b] * v[dof[s, b]]
             cu1[a] = ca
-            steady += wf[U1 + a] * ca
+            steady += v[dof[s, a]] * ca
         cross = 0.0 + 0.0j
         for k in range(2 * n):
             if wt[k] == 0.0:
@@ -310,7 +311,7 @@ def integrate_modal(w, s, n, tau, units, record, r0, r1):
             hk = 0.0 + 0.0j
             for a in range(n):
                 hk += vec[s, a, k] * cu1[a]
-            cross += wt[k] * wc[W + k] * lam[s, k] * hk * single[k, 0]
+            cross += wt[k] * wc[W + k] * lam[s, k] * hk * single[k, NPOLY]
         diag[D_VISC] += quad.real + 2.0 * cross.real + steady * tau
     for j in range(mode.shape[0]):
         if mode[j] != MODE_FREE and mode[j] != MODE_LOCKED:

@@ -137,6 +137,7 @@ from impact.engine.modal import (
 )
 from impact.engine.sampler import sample_segment
 from impact.engine.segment import (
+    SINGLE_COLUMNS,
     bound,
     bound_tab,
     build_segment,
@@ -145,8 +146,10 @@ from impact.engine.segment import (
     derivative_row,
     energy,
     int_prod,
+    int_prod_ramp,
     integral_tables,
     kappa_powers,
+    ramp_tables,
     same_unit,
     scene_key,
     state_from_exp,
@@ -613,8 +616,11 @@ def grow_powers(kap, kpow):
 @njit(cache=True, inline='always')
 def integrate_segment(w, tau, building, units, springs, harm, record, load_at):
     """Exact work of the load, viscous dissipation and stuck time over [0, tau] (tables: integral_tables);
-    load_at: (theta0, r0, r1), the load at the segment's start (segment_load)."""
+    load_at: (theta0, r0, r1), the load at the segment's start (segment_load).  Without a harmonic load the
+    dissipation's products of velocity rows are taken in the ramp form (segment.ramp_tables), from the state's
+    velocities."""
     kap, C, P, mode, load_vec, pair, single, diag = w.kap, w.C, w.P, w.mode, w.load_vec, w.pair, w.single, w.diag
+    ramp, v = w.ramp, w.v
     cv, pv, cu, pu = w.cv, w.pv, w.cu, w.pu
     theta0, r0, r1 = load_at
     nf = building.mass.shape[0]
@@ -661,7 +667,10 @@ def integrate_segment(w, tau, building, units, springs, harm, record, load_at):
                     cu[0, k] += cab * cv[b, k]
                 for k in range(NPOLY):
                     pu[0, k] += cab * pv[b, k]
-        visc += int_prod(tau, pair, single, cv[a], pv[a], cu[0], pu[0])
+        if harm is not None:
+            visc += int_prod(tau, pair, single, cv[a], pv[a], cu[0], pu[0])
+        else:
+            visc += int_prod_ramp(tau, ramp, single, v[a], cv[a], pv[a], damped_start(cb, v, a), cu[0], pu[0])
     if springs is not None:
         uc = springs.damping
         ufloor = units.floor
@@ -672,21 +681,35 @@ def integrate_segment(w, tau, building, units, springs, harm, record, load_at):
                     cu[0, k] = cv[nf + j, k] - cv[f, k]
                 for k in range(NPOLY):
                     pu[0, k] = pv[nf + j, k] - pv[f, k]
-                visc += uc[j] * int_prod(tau, pair, single, cu[0], pu[0], cu[0], pu[0])
+                if harm is not None:
+                    visc += uc[j] * int_prod(tau, pair, single, cu[0], pu[0], cu[0], pu[0])
+                else:
+                    rel = v[nf + j] - v[f]
+                    visc += uc[j] * int_prod_ramp(tau, ramp, single, rel, cu[0], pu[0], rel, cu[0], pu[0])
     diag[D_VISC] += visc
     for j in range(mode.shape[0]):
         if mode[j] != MODE_FREE and mode[j] != MODE_LOCKED:
             diag[D_STUCKTIME] += tau
 
 
+@njit(cache=True, inline='always')
+def damped_start(cb, v, a):
+    """Row a of the damping matrix times the velocities: the damping force's start value."""
+    out = 0.0
+    for b in range(cb.shape[1]):
+        out += cb[a, b] * v[b]
+    return out
+
+
 @njit(cache=True)
-def step_tables(s, key, tau, dt, kap, ek, pair, single, dtab):
+def step_tables(s, key, tau, dt, kap, ek, pair, single, ramp, dtab):
     """ek = exp(kap tau) and the integral tables over tau.
 
     A record's whole sample step (tau == dt) recurs in every configuration
-    after each event: its tables are kept per cache slot and copied.
+    after each event: its tables are kept per cache slot and copied, the ramp form's with them (any other step's
+    are made in the loop, once a segment's step is known, for the step it integrates).
     """
-    dkey, dek, dpair, dsingle = dtab
+    dkey, dek, dpair, dsingle, dramp = dtab
     nt = kap.shape[0]
     if tau != dt:
         for k in range(nt):
@@ -697,13 +720,15 @@ def step_tables(s, key, tau, dt, kap, ek, pair, single, dtab):
         for k in range(nt):
             dek[s, k] = np.exp(kap[k] * tau)
         integral_tables(kap, dek[s], tau, dpair[s], dsingle[s])
+        ramp_tables(kap, dek[s], tau, dramp[s], dsingle[s])
         dkey[s] = key
     for k in range(nt):
         ek[k] = dek[s, k]
-        for m in range(NPOLY):
+        for m in range(SINGLE_COLUMNS):
             single[k, m] = dsingle[s, k, m]
         for l in range(nt):
             pair[k, l] = dpair[s, k, l]
+            ramp[k, l] = dramp[s, k, l]
 
 
 @njit(cache=True, inline='always')
@@ -1099,7 +1124,8 @@ def _workspace(nt, nfull, nu, nmax, slots, nmon):
     """Every array a run works in, allocated once."""
     seg = Segment(np.zeros(nt, dtype=np.complex128), np.zeros((nfull, nt), dtype=np.complex128),
                   np.zeros((nfull, NPOLY)), np.zeros(nt, dtype=np.complex128), np.zeros((nt, nt), dtype=np.complex128),
-                  np.zeros((nt, NPOLY), dtype=np.complex128), np.zeros((5, nt)))
+                  np.zeros((nt, SINGLE_COLUMNS), dtype=np.complex128), np.zeros((nt, nt), dtype=np.complex128),
+                  np.zeros((5, nt)))
     rows = Rows(np.zeros(nt, dtype=np.complex128), np.zeros(NPOLY), np.zeros(nt, dtype=np.complex128), np.zeros(NPOLY),
                 np.zeros(nt, dtype=np.complex128), np.zeros(NPOLY), np.zeros((nfull, nt), dtype=np.complex128),
                 np.zeros((nfull, NPOLY)), np.zeros((2, nt), dtype=np.complex128), np.zeros((2, NPOLY)))
@@ -1109,7 +1135,9 @@ def _workspace(nt, nfull, nu, nmax, slots, nmon):
                     np.zeros(nu, dtype=np.bool_), np.zeros(nu), np.zeros(nu, dtype=np.bool_),
                     np.zeros(nfull, dtype=np.bool_))
     step = StepTables(np.full(slots, -1, dtype=np.int64), np.zeros((slots, nt), dtype=np.complex128),
-                      np.zeros((slots, nt, nt), dtype=np.complex128), np.zeros((slots, nt, NPOLY), dtype=np.complex128))
+                      np.zeros((slots, nt, nt), dtype=np.complex128),
+                      np.zeros((slots, nt, SINGLE_COLUMNS), dtype=np.complex128),
+                      np.zeros((slots, nt, nt), dtype=np.complex128))
     tables = Tables(modal_tables(slots, nmax, nmon), step, (np.zeros(7 * nmax), np.zeros(4 * nmax, dtype=np.complex128)),
                     np.zeros(1, dtype=np.int64))
     return Workspace(seg, rows, vecs, events, tables)
@@ -1277,7 +1305,7 @@ def _segment_work(ws, st, out, cache, load_vec):
     cache_b = ConfigCache(b(cache.key), b(cache.size), b(cache.lam), b(cache.vec), b(cache.vinv), b(cache.kinv),
                           b(cache.damping), b(cache.dof), b(cache.load), b(cache.forced), b(cache.mass))
     mtab_b = ModalTables(b(mtab.key), b(mtab.gvis), b(mtab.lmod), b(mtab.mvec), b(mtab.mbnd))
-    return SegmentWork(b(seg.kap), b(seg.C), b(seg.P), b(seg.ek), b(seg.pair), b(seg.single), b(seg.kpow),
+    return SegmentWork(b(seg.kap), b(seg.C), b(seg.P), b(seg.ek), b(seg.pair), b(seg.single), b(seg.ramp), b(seg.kpow),
                        b(rows.cs), b(rows.ps), b(rows.cq), b(rows.pq), b(rows.cm), b(rows.pm), b(rows.cv), b(rows.pv),
                        b(rows.cu), b(rows.pu), b(vecs.stack), b(vecs.found), b(vecs.reduced), b(vecs.moduli),
                        b(vecs.s_before), b(vecs.wt), b(ev.t), b(ev.side), b(ev.kind), cache_b, b(load_vec), b(st.mode), b(st.side), b(st.sigma), b(st.offset),
@@ -1308,7 +1336,7 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
                   start.q.copy(), start.v.copy())
     # the steps inlined on every segment take one structref of the arrays they work in (impact.engine.bundles)
     w = _segment_work(ws, st, out, cache, load_vec)
-    kap, C, P, ek, pair, single, kpow = ws.seg
+    kap, C, P, ek, pair, single, ramp, kpow = ws.seg
     _, _, qs, vs, _, _, aw, _, wt = ws.vecs
     ev_t, ev_side, ev_kind = ws.events.t, ws.events.side, ws.events.kind
     mtab, dtab, work, cursor = ws.tables
@@ -1357,7 +1385,7 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
             kpow_key = key
         if record is not None and (key != tab_key or tau_max != tab_tau):
             # sampled loads repeat the same step in the same configuration: the tables carry over
-            step_tables(s, key, tau_max, p[P_REC_DT], kap, ek, pair, single, dtab)
+            step_tables(s, key, tau_max, p[P_REC_DT], kap, ek, pair, single, ramp, dtab)
             tab_key = key
             tab_tau = tau_max
         diag[D_SEGMENTS] += 1.0
@@ -1370,9 +1398,13 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
         wc = work[1]  # the segment's modal amplitudes are wc[2n:4n] (build_segment)
         amplitude_moduli(n, wc, aw)
         if key != tab_key or tau != tab_tau:
-            step_tables(s, key, tau, p[P_REC_DT] if record is not None else -1.0, kap, ek, pair, single, dtab)
+            step_tables(s, key, tau, p[P_REC_DT] if record is not None else -1.0, kap, ek, pair, single, ramp, dtab)
             tab_key = key
             tab_tau = tau
+        if harm is None and (record is None or tau != p[P_REC_DT]):
+            # the ramp form's tables of any other step than a whole sample step (step_tables keeps those), made
+            # once the step is known; a harmonic load's rows have no ramp and integrate term by term
+            ramp_tables(kap, ek, tau, ramp, single)
         if yld is None or key >> nu == 0:
             integrate_energy(w, s, n, tau, building, units, springs, harm, record, (theta0, r0, r1))
         else:

@@ -26,6 +26,11 @@ _SERIES = 0.5  # |z T| below which the integrals use their power series
 # and 8 terms reach eps there (0.05^9 / 10! = 5e-19)
 _PHI0_SERIES, _PHI0_TERMS = 0.05, 8
 _RECIP = np.concatenate((np.zeros(1), 1.0 / np.arange(1.0, 46.0)))  # _RECIP[n] = 1 / n
+# the ramp form's series (ramp_tables): below |z T| = 2 a closed form of exp(zT) - 1 - zT - (zT)^2 / 2 loses up to
+# 3 digits to cancellation at 0.5 and one at 2; 45 terms reach eps of the result's size at 2 (2^44 / 45! = 1.5e-43)
+_RAMP_SERIES = 2.0
+#: single's columns (integral_tables, ramp_tables): tau^m exp(kap tau) for m < NPOLY, then tau^m (exp(kap tau) - 1)
+SINGLE_COLUMNS = 2 * NPOLY
 
 
 # ----------------------------------------------------------------------------
@@ -738,6 +743,105 @@ def integral_tables(kap, ek, big_t, pair, single):
         _phi_m(kap[k], big_t, ek[k], buf)
         for m in range(NPOLY):
             single[k, m] = buf[m]
+
+
+@njit(cache=True)
+def _rest2(x, ex):
+    """The integral over [0, 1] of exp(x u) - 1 - x u, du: sum over m >= 2 of x^m / (m + 1)!; ex = exp(x)."""
+    if x.real * x.real + x.imag * x.imag >= _RAMP_SERIES * _RAMP_SERIES:
+        return (ex - 1.0 - x - 0.5 * x * x) / x
+    term = x * x * _RECIP[2] * _RECIP[3]
+    acc = 0.0 + 0.0j
+    for m in range(2, 44):
+        acc += term
+        term = term * x * _RECIP[m + 2]
+        if term.real * term.real + term.imag * term.imag <= 1e-36 * (acc.real * acc.real + acc.imag * acc.imag):
+            break
+    return acc
+
+
+@njit(cache=True)
+def _ramp_singles(z, big_t, ez, out):
+    """out[m] = integral over [0, T] of tau^m (exp(z tau) - 1), m = 0..3, to round-off of its own size."""
+    zt = z * big_t
+    if zt.real * zt.real + zt.imag * zt.imag >= _RAMP_SERIES * _RAMP_SERIES:
+        val = (ez - 1.0) / z
+        out[0] = val - big_t
+        for i in range(1, NPOLY):
+            val = (big_t ** i * ez - i * val) / z
+            out[i] = val - big_t ** (i + 1) * _RECIP[i + 1]
+        return
+    # sum over n >= 1 of (zT)^n / n! T^(m+1) / (n + m + 1), every m in one pass
+    term = zt
+    a0 = 0.0 + 0.0j
+    a1 = 0.0 + 0.0j
+    a2 = 0.0 + 0.0j
+    a3 = 0.0 + 0.0j
+    for n in range(1, 41):
+        a0 += term * _RECIP[n + 1]
+        a1 += term * _RECIP[n + 2]
+        a2 += term * _RECIP[n + 3]
+        a3 += term * _RECIP[n + 4]
+        term = term * zt * _RECIP[n + 1]
+        if term.real * term.real + term.imag * term.imag <= 1e-36 * (a0.real * a0.real + a0.imag * a0.imag):
+            break
+    out[0] = a0 * big_t
+    out[1] = a1 * big_t ** 2
+    out[2] = a2 * big_t ** 3
+    out[3] = a3 * big_t ** 4
+
+
+@njit(cache=True)
+def ramp_tables(kap, ek, big_t, ramp, single):
+    """The ramp form's tables over [0, T]: ramp[k, l] of (exp(kap_k tau) - 1)(exp(kap_l tau) - 1), and
+    single[k, NPOLY + m] of tau^m (exp(kap_k tau) - 1), each to round-off of its own size.
+
+    Under a record a slow mode's row is an exponential and a polynomial of the load over the mode's frequency
+    squared, far larger than the motion they cancel to, and a product of two such rows integrated term by term
+    (int_prod) keeps the square of that cancellation.  Written from its start value, a velocity row is
+    v0 + sum_k c_k (exp(kap_k tau) - 1) (+ a polynomial without constant), whose terms are the size of the
+    motion's change: int_prod_ramp integrates those.  (exp(a t) - 1)(exp(b t) - 1) is
+    r(a + b) - r(a) - r(b) with r(z) = exp(z t) - 1 - z t, whose first orders cancel exactly."""
+    nt = kap.shape[0]
+    rest = np.empty(nt, dtype=np.complex128)
+    buf = np.empty(NPOLY, dtype=np.complex128)
+    for k in range(nt):
+        rest[k] = _rest2(kap[k] * big_t, ek[k])
+        _ramp_singles(kap[k], big_t, ek[k], buf)
+        for m in range(NPOLY):
+            single[k, NPOLY + m] = buf[m]
+    for k in range(nt):
+        for l in range(k, nt):
+            v = big_t * (_rest2((kap[k] + kap[l]) * big_t, ek[k] * ek[l]) - rest[k] - rest[l])
+            ramp[k, l] = v
+            ramp[l, k] = v
+
+
+@njit(cache=True)
+def int_prod_ramp(big_t, ramp, single, a0, ca, pa, b0, cb, pb):
+    """Integral over [0, T] of the product of two rows, each written from its start value (a0, b0) in the ramp
+    form: a0 + sum_k ca_k (exp(kap_k tau) - 1) + pa_1 tau + pa_2 tau^2 + pa_3 tau^3 (ramp_tables)."""
+    if big_t <= 0.0:
+        return 0.0
+    nt = ca.shape[0]
+    acc = 0.0 + 0.0j
+    for j in range(nt):
+        inner = b0 * single[j, NPOLY]
+        cross = a0 * single[j, NPOLY]
+        for m in range(1, NPOLY):
+            inner += pb[m] * single[j, NPOLY + m]
+            cross += pa[m] * single[j, NPOLY + m]
+        for l in range(nt):
+            inner += cb[l] * ramp[j, l]
+        acc += ca[j] * inner + cb[j] * cross
+    poly = a0 * b0 * big_t
+    for m in range(1, NPOLY):
+        tp = big_t ** (m + 1) * _RECIP[m + 1]
+        poly += (a0 * pb[m] + b0 * pa[m]) * tp
+    for i in range(1, NPOLY):
+        for j in range(1, NPOLY):
+            poly += pa[i] * pb[j] * big_t ** (i + j + 1) * _RECIP[i + j + 1]
+    return acc.real + poly
 
 
 @njit(cache=True)
