@@ -128,7 +128,9 @@ def smoke_digest(results) -> dict:
     tables' columns were then reworked (ties within the hunt's resolution, a clear flag per verdict): the seven new
     columns of collapse_{best,groups,margins,verdicts}.csv are functions of each motion's collapse bracket and flags,
     whose spread over the five kernel sets was 0, so theirs is 0; the other 1,009 entries stayed identical to the
-    bit, through the stages' move to run.simulate as well.
+    bit, through the stages' move to run.simulate as well.  Not regenerated for the viscous dissipation's ramp form
+    (issue 42, 775fb48): 987 of 1,016 entries stayed identical to the bit, and the 29 that moved are energy residuals
+    of runs under records (1e-16 to 7e-12), each within its round-off spread.
     Regenerate it only for a change meant to move
     numbers, or a new constraints.txt: python tools/roundoff_ensemble.py --write
     """
