@@ -507,8 +507,10 @@ OPEN_AT_SCALE = {
     # under the weight it carries, dampers included, beside a TMD of twelve units and 15 % of the mass: a slow pair
     # (0.07 rad/s) with coefficients of kilometres cancelling to the roof's millimetres.  The energy balanced to
     # 7.4e-2 with the TMD alone (7.7e-11 bare); its roof's square integral was -0.38 m^2 s, a crash (held below).
-    # With the dissipation in the ramp form, the scene balances to -3.0e-7: what is left is the state's own
-    # round-off, a motion of millimetres read off rows of kilometres (docs/model.md, "Energy balance")
+    # With the dissipation in the ramp form, the scene balances to -3.0e-7, and its TMD alone (one unit) to -9.1e-8:
+    # a different cause, the motion itself, whose load work moves by 1.1e-7 from one OpenBLAS kernel set to another
+    # (-9.1e-8, +4.6e-9, -9.0e-8 under Haswell, Sandybridge, SkylakeX): the TMD's modes beside the soft storey read
+    # through an ill-conditioned eigenbasis (docs/model.md, "Energy balance")
     (2572387895, 2905): "energy residual",
     # the class on yielding buildings with P-delta, found by the probe of 5d7fbde: a 10-storey building whose weakest
     # storey keeps 0.54 % of its stiffness under gravity (fundamental 0.149 rad/s), energy to -1.94e-6 (1.4e-9 with
