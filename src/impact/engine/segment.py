@@ -477,8 +477,7 @@ def build_segment(w, s, units, springs, fric, yld, harmonic, load_at, omega):
     load_at = (theta0, r0, r1): r0 + r1 tau is the record's value on the segment (per unit of load_vec);
     harmonic: the load is sin(theta0 + omega tau) per unit of load_vec.
     w.wf, w.wc (floats, complexes): scratch of 7 and 4 times the largest reduced size, so that a
-    segment allocates nothing; the modal amplitudes are left in complexes[2n:4n] and the particular
-    solution's velocity in floats[2n:3n] (the modal shortcuts read them).
+    segment allocates nothing; the modal amplitudes are left in complexes[2n:4n] (the modal shortcuts read them).
     yld: a yielding building's storeys (bundles.YieldArrays), whose constant forces join the load; where a perfectly
     plastic storey leaves K singular (a zero mode), the particular solution is taken through the modes
     (_modal_particular), and through K^-1 as for an elastic building everywhere else, which a stiff pendulum's
@@ -761,17 +760,10 @@ def _rest2(x, ex):
 
 
 @njit(cache=True)
-def _ramp_singles(z, big_t, ez, out):
-    """out[m] = integral over [0, T] of tau^m (exp(z tau) - 1), m = 0..3, to round-off of its own size."""
+def _ramp_series(z, big_t, single, k):
+    """single[k, NPOLY + m] = integral over [0, T] of tau^m (exp(z tau) - 1), m = 0..3, by its power series
+    (|z T| < _RAMP_SERIES): sum over n >= 1 of (zT)^n / n! T^(m+1) / (n + m + 1), every m in one pass."""
     zt = z * big_t
-    if zt.real * zt.real + zt.imag * zt.imag >= _RAMP_SERIES * _RAMP_SERIES:
-        val = (ez - 1.0) / z
-        out[0] = val - big_t
-        for i in range(1, NPOLY):
-            val = (big_t ** i * ez - i * val) / z
-            out[i] = val - big_t ** (i + 1) * _RECIP[i + 1]
-        return
-    # sum over n >= 1 of (zT)^n / n! T^(m+1) / (n + m + 1), every m in one pass
     term = zt
     a0 = 0.0 + 0.0j
     a1 = 0.0 + 0.0j
@@ -785,16 +777,17 @@ def _ramp_singles(z, big_t, ez, out):
         term = term * zt * _RECIP[n + 1]
         if term.real * term.real + term.imag * term.imag <= 1e-36 * (a0.real * a0.real + a0.imag * a0.imag):
             break
-    out[0] = a0 * big_t
-    out[1] = a1 * big_t ** 2
-    out[2] = a2 * big_t ** 3
-    out[3] = a3 * big_t ** 4
+    single[k, NPOLY] = a0 * big_t
+    single[k, NPOLY + 1] = a1 * big_t ** 2
+    single[k, NPOLY + 2] = a2 * big_t ** 3
+    single[k, NPOLY + 3] = a3 * big_t ** 4
 
 
 @njit(cache=True)
 def ramp_tables(kap, ek, big_t, ramp, single):
     """The ramp form's tables over [0, T]: ramp[k, l] of (exp(kap_k tau) - 1)(exp(kap_l tau) - 1), and
-    single[k, NPOLY + m] of tau^m (exp(kap_k tau) - 1), each to round-off of its own size.
+    single[k, NPOLY + m] of tau^m (exp(kap_k tau) - 1), each to round-off of its own size; single[k, :NPOLY] must
+    hold integral_tables' over the same T, whose closed form the ramp's takes where it keeps its digits.
 
     Under a record a slow mode's row is an exponential and a polynomial of the load over the mode's frequency
     squared, far larger than the motion they cancel to, and a product of two such rows integrated term by term
@@ -804,12 +797,14 @@ def ramp_tables(kap, ek, big_t, ramp, single):
     r(a + b) - r(a) - r(b) with r(z) = exp(z t) - 1 - z t, whose first orders cancel exactly."""
     nt = kap.shape[0]
     rest = np.empty(nt, dtype=np.complex128)
-    buf = np.empty(NPOLY, dtype=np.complex128)
     for k in range(nt):
-        rest[k] = _rest2(kap[k] * big_t, ek[k])
-        _ramp_singles(kap[k], big_t, ek[k], buf)
-        for m in range(NPOLY):
-            single[k, NPOLY + m] = buf[m]
+        zt = kap[k] * big_t
+        rest[k] = _rest2(zt, ek[k])
+        if zt.real * zt.real + zt.imag * zt.imag >= _RAMP_SERIES * _RAMP_SERIES:
+            for m in range(NPOLY):
+                single[k, NPOLY + m] = single[k, m] - big_t ** (m + 1) * _RECIP[m + 1]
+        else:
+            _ramp_series(kap[k], big_t, single, k)
     for k in range(nt):
         for l in range(k, nt):
             v = big_t * (_rest2((kap[k] + kap[l]) * big_t, ek[k] * ek[l]) - rest[k] - rest[l])
