@@ -15,7 +15,7 @@ from impact.engine.paper import simulate as paper_simulate
 from impact.engine.scenes import simulate_scene
 from impact.model.building import Building
 from impact.model.params import ParameterError, Protocol, System
-from impact.model.scene import Damper, Harmonic, Scene, paper_scene_from_system
+from impact.model.scene import Damper, GroundMotion, Harmonic, Scene, paper_scene_from_system
 
 SHORT = Protocol(periods=60.0, average_from=30.0, start="left")
 PAPER = dict(mu=0.01, beta=0.0048, e=0.25)
@@ -83,6 +83,31 @@ def test_unknown_measures_and_stray_options_are_refused_by_name():
         engine.simulate(scene, measures=("amplitude", "stroke"))
     with pytest.raises(ParameterError, match="record and times"):
         engine.simulate(scene, record=3)
+
+
+def test_a_run_certifies_the_peaks_it_is_asked_for_to_the_bit_and_no_others():
+    """A run asked for the drifts or the strokes alone certifies those peaks exactly as a run asked for every peak
+    (each monitor is searched on its own; the roof's row still gives the window its square), reads NaN for the
+    others, and moves, impacts and balances its energy to the bit as the full run does."""
+    building = Building.uniform(3, 1.0, 0.02)
+    t = np.arange(0.0, 6.0, 0.01)
+    quake = GroundMotion(3.0 * np.sin(2.0 * np.pi * t) * np.exp(-0.3 * t), 0.01)
+    scene = Scene(building, (Damper("cid", 0.02 * building.total_mass, gap=0.05, e=0.5, units=4),), quake)
+    full = engine.simulate(scene, measures=("amplitude", "impacts", "peaks"))
+    drifts = engine.simulate(scene, measures=("amplitude", "impacts", "drifts"))
+    strokes = engine.simulate(scene, measures=("amplitude", "impacts", "strokes"))
+    assert full.impacts > 10 and np.all(full.peak_strokes > 0.0)  # the units reach their walls
+    np.testing.assert_array_equal(drifts.peak_drifts, full.peak_drifts)
+    np.testing.assert_array_equal(strokes.peak_strokes, full.peak_strokes)
+    for part in (drifts, strokes):
+        np.testing.assert_array_equal(part.final_q, full.final_q)
+        assert (part.impacts, part.amplitude, part.diagnostics["energy_residual"]) == \
+            (full.impacts, full.amplitude, full.diagnostics["energy_residual"])
+        assert math.isnan(part.peak_roof_displacement) and math.isnan(part.peak_roof_acceleration)
+    assert np.all(np.isnan(drifts.peak_strokes)) and np.all(np.isnan(strokes.peak_drifts))
+    assert math.isnan(engine.simulate(scene).peak_interstorey_drift)  # the default asks for no peak
+    with pytest.raises(ParameterError, match="peaks: 'storeys' unknown; allowed roof, drifts, strokes"):
+        simulate_scene(scene, peaks=("storeys",))
 
 
 def test_the_paper_loop_defines_no_index_of_its_own_and_reads_the_engines_one_layout():

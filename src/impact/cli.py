@@ -147,13 +147,16 @@ PLOT_IMPACTS = 50_000
 PLOT_SAMPLES = 20_000
 
 
-def _plotted(scene, step: float) -> dict:
-    """simulate()'s keywords that also return what --plot draws: samples every `step` (at most PLOT_SAMPLES)
-    and the impact records.  The plotted run is the run reported: it then runs on the scene loop."""
+def _asked(scene, measures: tuple, step: float | None = None) -> dict:
+    """simulate()'s keywords: the measures a command reports and, given a `step`, what --plot draws too: samples
+    every `step` (at most PLOT_SAMPLES) and the impact records.  The plotted run is the run reported: it then runs
+    on the scene loop."""
+    if step is None:
+        return {"measures": measures}
     import numpy as np
 
     times = np.linspace(0.0, scene.t_end, min(PLOT_SAMPLES, int(scene.t_end / step) + 1))
-    return {"measures": ("amplitude", "impacts", "samples", "records"), "record": PLOT_IMPACTS, "times": times}
+    return {"measures": (*measures, "samples", "records"), "record": PLOT_IMPACTS, "times": times}
 
 
 def _plot(path: str, scene, res, title: str, length_unit: str, impulse_unit: str, roof_bare=None) -> None:
@@ -181,8 +184,7 @@ def cmd_run(args) -> dict:
 
     system = _system(args)
     scene = paper_scene_from_system(system, args.r, _protocol(args), units=args.units)
-    plotted = _plotted(scene, 2.0 * math.pi / args.r / 20) if args.plot else {}
-    res = simulate(scene, **plotted)
+    res = simulate(scene, **_asked(scene, ("amplitude", "impacts"), 2.0 * math.pi / args.r / 20 if args.plot else None))
     if args.plot:
         _plot(args.plot, scene, res, f"impact {' '.join(sys.argv[1:])}", "1", "1")
     cycles = res.window_span * args.r / (2.0 * math.pi)
@@ -385,7 +387,8 @@ def cmd_quake(args) -> dict:
     if (args.plot or args.compare_bare) and not dampers:
         flag = "--plot draws a damper's strokes and impacts" if args.plot else "--compare-bare compares a damper"
         raise ParameterError(f"{flag}: give --damper {either(KINDS)}")
-    plotted = _plotted(scene, building.period1 / 50) if args.plot or args.series else {}
+    plotted = _asked(scene, ("amplitude", "impacts", "peaks"),
+                     building.period1 / 50 if args.plot or args.series else None)
     res = simulate(scene, **plotted)
     bare = None
     if args.plot or args.compare_bare:

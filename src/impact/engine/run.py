@@ -22,14 +22,14 @@ from impact.engine import layout as L
 from impact.engine import paper
 from impact.engine import paper_loop as K
 from impact.engine.diagnostics import read_diagnostics
-from impact.engine.scenes import SceneResult, simulate_scene
+from impact.engine.scenes import PEAK_GROUPS, SceneResult, simulate_scene
 from impact.model.params import ParameterError, System
 from impact.model.scene import Harmonic, Scene
 
 #: what a run can measure: the window's amplitude (sqrt 2 RMS of the roof), the impacts and diagnostics
-#: with the final state, the certified peaks of every monitor (roof, drifts, strokes), impact records and
-#: the state at requested times
-MEASURES = ("amplitude", "impacts", "peaks", "records", "samples")
+#: with the final state, the certified peaks of every monitor (roof, drifts, strokes) or of the drifts or the
+#: strokes alone, impact records and the state at requested times
+MEASURES = ("amplitude", "impacts", "peaks", "drifts", "strokes", "records", "samples")
 DEFAULT_MEASURES = ("amplitude", "impacts")
 PAPER_MEASURES = frozenset(("amplitude", "impacts"))
 
@@ -94,7 +94,13 @@ def _run_paper(scene: Scene, measures: frozenset, record: int, times) -> SceneRe
 
 
 def _run_scene(scene: Scene, measures: frozenset, record: int, times) -> SceneResult:
-    return simulate_scene(scene, record=record, times=times)
+    return simulate_scene(scene, record=record, times=times, peaks=peak_groups(measures))
+
+
+def peak_groups(measures: frozenset) -> tuple:
+    """The monitors' groups (scenes.PEAK_GROUPS) whose peaks the measures ask the scene loop to certify: every
+    group for "peaks", else those named ("drifts", "strokes"); a group not asked costs nothing and reads NaN."""
+    return PEAK_GROUPS if "peaks" in measures else tuple(g for g in PEAK_GROUPS if g in measures)
 
 
 #: the loops, tried in order (the fast special case first)
@@ -106,10 +112,12 @@ def simulate(scene: Scene, measures=DEFAULT_MEASURES, *, record: int = 0, times=
 
     measures: names from :data:`MEASURES`, what the run must return beside its diagnostics and final state:
     "amplitude" (the paper's amplitude, sqrt 2 times the roof's RMS over the window), "impacts" (the impact count),
-    "peaks" (the certified peaks of the roof, every drift and every unit's stroke, and their RMS), "records" (each
+    "peaks" (the certified peaks of the roof, every drift and every unit's stroke, and their RMS), "drifts" or
+    "strokes" (the certified peaks of the storeys' drifts or of the units' strokes alone), "records" (each
     impact's time, unit, side, velocities and impulse, up to `record` of them), "samples" (every degree of freedom's
     displacement and velocity at `times`, a sorted array of instants).  Asking only for what is read lets the
-    dispatch pick the fastest loop that measures it.
+    dispatch pick the fastest loop that measures it, and the scene loop certify only the peaks that are read: a
+    peak not asked for is NaN.
     """
     asked = frozenset(measures)
     unknown = sorted(asked - set(MEASURES))

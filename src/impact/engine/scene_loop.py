@@ -739,18 +739,23 @@ def monitor_modal(w, s, n, tau, t, t_win, monitors, ramp, harmonic, yielding):
     Rows and curvature bounds come from the modal tables: a segment whose ends
     and bound cannot beat the running peak is settled without the search, as
     peak_abs's own first test would settle it.  A monitor whose peak has
-    reached its cap (a stroke at its wall) is not searched again.
+    reached its cap is not searched again: a stroke at its wall, or a monitor
+    the run was not asked to certify (cap 0, scenes.PEAK_GROUPS); the first
+    (the roof) still gives the window its square.
     """
     kap, kpow, ek, cm, pm, stack, wt, diag = w.kap, w.kpow, w.ek, w.cm, w.pm, w.stack, w.wt, w.diag
     mon_peak, mon_peak_t = w.mon_peak, w.mon_peak_t
     mon_rows, mon_cap = monitors.rows, monitors.cap
     r0, r1 = ramp
     for m in range(mon_rows.shape[0]):
-        if m != 0 and mon_peak[m] >= mon_cap[m]:
+        searched = mon_peak[m] < mon_cap[m]
+        if not searched and m != 0:
             continue
         monitor_row(w, s, m, n, monitors, r0, r1, harmonic)
         if m == 0 and t + tau > t_win:
             window_square(w, tau, t, t_win, yielding)
+        if not searched:
+            continue
         halve(cm, wt)
         h0, h1 = end_values(ek, cm, pm, tau)
         ends = max(abs(h0), abs(h1))

@@ -153,12 +153,22 @@ def _load_arrays(scene: Scene, mass_full: np.ndarray):
     raise ParameterError(f"load of type {type(load).__name__} is not supported: Harmonic, GroundMotion or ForceRecord")
 
 
-def _monitors(scene: Scene, nfull: int):
+#: the monitors a run can certify peaks of, by group: the roof (its displacement and absolute acceleration),
+#: each storey's drift, each damper's stroke.  A run certifies the groups it is asked for (simulate_scene's
+#: `peaks`); the others read NaN and cost nothing but the roof's row, which the window's square reads
+PEAK_GROUPS = ("roof", "drifts", "strokes")
+
+
+def _monitors(scene: Scene, nfull: int, peaks=PEAK_GROUPS):
     """Rows: roof displacement, roof absolute acceleration, each storey's drift, each damper's stroke.
 
     Also each row's cap: a bound its peak cannot pass (beyond the contact tolerance).  A stroke between
-    walls reaches its cap, half the gap, at the first impact; the kernel stops searching it from then on.
+    walls reaches its cap, half the gap, at the first impact; the kernel stops searching it from then on.  A
+    group the run is not asked to certify (`peaks`, of PEAK_GROUPS) has cap 0: the kernel never searches it.
     """
+    unknown = sorted(set(peaks) - set(PEAK_GROUPS))
+    if unknown:
+        raise ParameterError(f"peaks: {', '.join(map(repr, unknown))} unknown; allowed {', '.join(PEAK_GROUPS)}")
     nf = scene.building.storeys
     rows = []
     kinds = []
@@ -166,7 +176,7 @@ def _monitors(scene: Scene, nfull: int):
     roof[nf - 1] = 1.0
     rows += [roof, roof]
     kinds += [L.MON_DISP, L.MON_ACCEL]
-    caps = [math.inf] * (2 + nf)
+    caps = [_cap("roof", peaks)] * 2 + [_cap("drifts", peaks)] * nf
     for i in range(nf):
         r = np.zeros(nfull)
         r[i] = 1.0
@@ -181,9 +191,13 @@ def _monitors(scene: Scene, nfull: int):
         r[scene.floor_index(d.floor)] -= 1.0
         rows.append(r)
         kinds.append(L.MON_DISP)
-        caps.append(0.5 * d.gap if d.has_walls else math.inf)
+        caps.append(min(0.5 * d.gap if d.has_walls else math.inf, _cap("strokes", peaks)))
         first += int(d.units)
     return np.array(rows), np.array(kinds, dtype=np.int64), np.array(caps)
+
+
+def _cap(group: str, peaks) -> float:
+    return math.inf if group in peaks else 0.0
 
 
 def _initial_state(scene: Scene, floor: np.ndarray, gap: np.ndarray, kind: np.ndarray, nfull: int):
@@ -235,7 +249,7 @@ def _yield_arrays(scene: Scene) -> YieldArrays | None:
                        zf.copy(), zi.copy(), zi.copy(), zf.copy(), zi.copy(), zi.copy(), zf.copy(), zi.copy())
 
 
-def _scene_arrays(scene: Scene):
+def _scene_arrays(scene: Scene, peaks=PEAK_GROUPS):
     b = scene.building
     omega1 = b.omega1
     kind, floor, mass, gap, e, k, c, a_f = _unit_arrays(scene, omega1)
@@ -249,7 +263,7 @@ def _scene_arrays(scene: Scene):
     units = UnitArrays(kind, floor, mass, uload, gap, e)
     springs = SpringArrays(k, c) if np.any(kind & L.UNIT_SPRING) else None
     fric = a_f if np.any(a_f > 0.0) else None
-    rows, kinds, caps = _monitors(scene, nf + len(mass))
+    rows, kinds, caps = _monitors(scene, nf + len(mass), peaks)
     monitors = MonitorArrays(rows, kinds, np.where(kinds == L.MON_ACCEL, mon_rec, 0.0), caps)
     n_spring = int(np.count_nonzero(kind & L.UNIT_SPRING))
     p = np.zeros(L.NPAR)
@@ -291,13 +305,14 @@ def run_arrays(arrays: dict, record: int = 0, times=None):
     return result
 
 
-def simulate_scene(scene: Scene, *, record: int = 0, times=None) -> SceneResult:
+def simulate_scene(scene: Scene, *, record: int = 0, times=None, peaks=PEAK_GROUPS) -> SceneResult:
     """Run a scene on the exact core.
 
     record: keep up to this many impact records; times: sorted times at which
-    to sample the state of every degree of freedom (dense output).
+    to sample the state of every degree of freedom (dense output); peaks: the groups of monitors
+    (PEAK_GROUPS) whose peaks the run certifies, the others NaN.
     """
-    arrays = _scene_arrays(scene)
+    arrays = _scene_arrays(scene, peaks)
     key = _signature_key(arrays)
     if key not in _WARM:
         with compile_lock(_kernel_name(key), _kernel_label(key), fresh=(run_scene,)):
@@ -305,7 +320,7 @@ def simulate_scene(scene: Scene, *, record: int = 0, times=None) -> SceneResult:
         _WARM.add(key)
     else:
         out = run_arrays(arrays, record, times)
-    return _result(scene, arrays, out)
+    return _result(scene, arrays, out, peaks)
 
 
 _WARM: set = set()  # the loops' specialisations compiled (or loaded) in this process
@@ -329,7 +344,7 @@ def _kernel_label(key: tuple) -> str:
     return "the engine's scene loop" + (f" for scenes with {', '.join(parts)}" if parts else "")
 
 
-def _result(scene: Scene, arrays: dict, out: dict) -> SceneResult:
+def _result(scene: Scene, arrays: dict, out: dict, groups=PEAK_GROUPS) -> SceneResult:
     nf = scene.building.storeys
     diag = out["diag"]
     span = diag[L.D_TEND] - scene.t_window
@@ -345,11 +360,14 @@ def _result(scene: Scene, arrays: dict, out: dict) -> SceneResult:
     if len(out["ts"]):
         nfull = len(out["q"])
         samples = {"t": out["ts"], "q": out["samples"][:, :nfull], "v": out["samples"][:, nfull:]}
-    peaks = out["peak"]
+    peaks = out["peak"].copy()
+    for group, part in zip(PEAK_GROUPS, (slice(0, 2), slice(2, 2 + nf), slice(2 + nf, None))):
+        if group not in groups:
+            peaks[part] = math.nan
     return SceneResult(
         scene=scene,
         peak_roof_displacement=float(peaks[0]) if complete else math.nan,
-        peak_roof_displacement_time=float(out["peak_t"][0]),
+        peak_roof_displacement_time=float(out["peak_t"][0]) if "roof" in groups else math.nan,
         rms_roof_displacement=rms,
         peak_roof_acceleration=float(peaks[1]) if complete else math.nan,
         peak_interstorey_drift=float(np.max(peaks[2:2 + nf])) if complete else math.nan,

@@ -33,5 +33,5 @@ def spectral_acceleration(record: Record, period_s: float, zeta: float = SPECTRU
                              "every period, so it cannot be scaled to an intensity")
     oscillator = Building.uniform(1, period_s, zeta)
     load = GroundMotion.from_record(record)
-    peak = simulate_scene(Scene(oscillator, (), load, duration=load.duration)).peak_roof_displacement
+    peak = simulate_scene(Scene(oscillator, (), load, duration=load.duration), peaks=("roof",)).peak_roof_displacement
     return (2.0 * math.pi / period_s) ** 2 * peak / G_GRAV

@@ -83,7 +83,7 @@ def scene_peak_response(design: Design, r_grid, protocol: Protocol, conditions: 
     amps, strokes = [], []
     for r in np.asarray(r_grid, dtype=float):
         result = simulate(design_scene(design, float(r), protocol, conditions, unit_starts),
-                          measures=("amplitude", "peaks"))
+                          measures=("amplitude", "strokes"))
         amps.append(result.amplitude)
         strokes.append(float(np.max(result.peak_strokes)))
     amps, strokes = np.array(amps), np.array(strokes)
