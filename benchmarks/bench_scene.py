@@ -7,9 +7,9 @@ The paper's one-storey harmonic case is timed on both kernels (the
 specialised one that the paper's study keeps, and the scene core, with every
 peak certified and with the amplitude alone, which is all the paper loop
 measures), so the ratio shows what generality costs there.  The CID case is
-also timed certifying the drifts' peaks alone, as the collapse stage asks.  Times are the minimum of repeats
-after a warm-up (the warm-up compiles); costs per segment and per impact are
-printed beside them.
+also timed certifying the drifts' peaks alone, as the collapse stage asks.
+Times are the minimum of repeats after a warm-up (the warm-up compiles); costs
+per segment and per impact are printed beside them.
 
     python benchmarks/bench_scene.py [--quick] [--out benchmarks/results/scene.json]
 

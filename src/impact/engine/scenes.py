@@ -176,7 +176,7 @@ def _monitors(scene: Scene, nfull: int, peaks=PEAK_GROUPS):
     roof[nf - 1] = 1.0
     rows += [roof, roof]
     kinds += [L.MON_DISP, L.MON_ACCEL]
-    caps = [_cap("roof", peaks)] * 2 + [_cap("drifts", peaks)] * nf
+    caps = [math.inf] * (2 + nf)
     for i in range(nf):
         r = np.zeros(nfull)
         r[i] = 1.0
@@ -191,13 +191,19 @@ def _monitors(scene: Scene, nfull: int, peaks=PEAK_GROUPS):
         r[scene.floor_index(d.floor)] -= 1.0
         rows.append(r)
         kinds.append(L.MON_DISP)
-        caps.append(min(0.5 * d.gap if d.has_walls else math.inf, _cap("strokes", peaks)))
+        caps.append(0.5 * d.gap if d.has_walls else math.inf)
         first += int(d.units)
-    return np.array(rows), np.array(kinds, dtype=np.int64), np.array(caps)
+    caps = np.array(caps)
+    for part in _unasked(nf, peaks):
+        caps[part] = 0.0
+    return np.array(rows), np.array(kinds, dtype=np.int64), caps
 
 
-def _cap(group: str, peaks) -> float:
-    return math.inf if group in peaks else 0.0
+def _unasked(nf: int, peaks) -> list[slice]:
+    """The monitors' rows (as _monitors lays them out: the roof's two, the drifts, the strokes) of the groups of
+    PEAK_GROUPS that `peaks` does not ask for."""
+    parts = dict(zip(PEAK_GROUPS, (slice(0, 2), slice(2, 2 + nf), slice(2 + nf, None))))
+    return [part for group, part in parts.items() if group not in peaks]
 
 
 def _initial_state(scene: Scene, floor: np.ndarray, gap: np.ndarray, kind: np.ndarray, nfull: int):
@@ -361,9 +367,8 @@ def _result(scene: Scene, arrays: dict, out: dict, groups=PEAK_GROUPS) -> SceneR
         nfull = len(out["q"])
         samples = {"t": out["ts"], "q": out["samples"][:, :nfull], "v": out["samples"][:, nfull:]}
     peaks = out["peak"].copy()
-    for group, part in zip(PEAK_GROUPS, (slice(0, 2), slice(2, 2 + nf), slice(2 + nf, None))):
-        if group not in groups:
-            peaks[part] = math.nan
+    for part in _unasked(nf, groups):
+        peaks[part] = math.nan
     return SceneResult(
         scene=scene,
         peak_roof_displacement=float(peaks[0]) if complete else math.nan,
