@@ -4,6 +4,10 @@ The toy kind here, a TMD with stops (a tuned mass whose stroke walls end, which 
 registered in the test alone: no other file of the package names it.
 """
 
+import ast
+import tokenize
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -11,7 +15,7 @@ from impact.engine.run import simulate
 from impact.model import kinds
 from impact.model.building import Building
 from impact.model.kinds import DamperKind
-from impact.model.params import ParameterError
+from impact.model.params import ParameterError, Protocol
 from impact.model.scene import Damper, Harmonic, Scene
 
 STOPPED_TMD = DamperKind("stopped_tmd", "tuned mass damper with stops", walls=True, spring=True, dashpot=True,
@@ -62,3 +66,48 @@ def test_a_kind_registered_alone_strikes_its_stops_within_the_engines_promises(s
     assert abs(diag["energy_residual"]) < 1e-9
     assert diag["max_penetration"] <= 1e-9 * gap
     assert diag["impact_losses"] > 0.0  # e = 0.6: each strike loses (1 - e^2) of its relative kinetic energy
+
+
+def test_a_stage_reads_a_kind_by_its_parts(stopped_tmd):
+    """The robustness stage varies, builds and starts a design by what its kind is made of, not by its name: the
+    toy kind has the TMD's dashpot and the CID's walls, so both its damping and its restitution vary, its units
+    start where the design puts them, and its stroke is not capped by damping (its walls cap it)."""
+    from impact.stages.robustness.designs import Design, applicable
+    from impact.stages.robustness.runs import capped_tmd_damping, design_scene
+
+    assert applicable(stopped_tmd) == ("scale", "drift", "damping", "e")
+    assert applicable("cid") == ("scale", "drift", "e") and applicable("tmd") == ("scale", "drift", "damping")
+    design = Design(stopped_tmd, 0.02, 0.02, gap_ratio=1.0, e=0.6, tuning=0.97, damping=0.05, start="left")
+    scene = design_scene(design, 1.0, Protocol(periods=4.0, average_from=2.0))
+    (damper,) = scene.dampers
+    assert (damper.kind, damper.gap, damper.tuning, scene.start) == (stopped_tmd, design.gap, 0.97, "left")
+    with pytest.raises(ValueError, match="without walls"):
+        capped_tmd_damping(design, [1.0], Protocol(), stroke_cap=1.0)
+
+
+def _kinds_named_in_code(path):
+    """(line, name) of every string in the file's code (docstrings and comments aside) that is a kind's name."""
+    names = set(kinds.damper_kinds())
+    with open(path, "rb") as f:
+        tokens = list(tokenize.tokenize(f.readline))
+    found = []
+    for tok in tokens:
+        if tok.type == tokenize.STRING:
+            try:
+                value = ast.literal_eval(tok.string)
+            except ValueError:
+                continue  # an f-string
+            if value in names:
+                found.append((tok.start[0], value))
+    return found
+
+
+def test_no_module_names_a_kind_but_the_registry():
+    """A branch on a kind reads its parts (KINDS[name].walls, ...) and a plan that names one of the study's kinds
+    reads model.kinds' CID, PID or TMD: no other module or workflow script spells a kind's name, so a new kind
+    is one entry in the registry."""
+    root = Path(kinds.__file__).parents[3]
+    files = [p for p in (*root.glob("src/impact/**/*.py"), *root.glob("workflow/scripts/*.py"))
+             if p != Path(kinds.__file__)]
+    spelt = [f"{p.relative_to(root)}:{line}: {name!r}" for p in files for line, name in _kinds_named_in_code(p)]
+    assert spelt == []

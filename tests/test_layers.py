@@ -35,7 +35,7 @@ MAY_IMPORT = {
     "closed_form": {"model"},
     "baselines": {"model"},
     "outputs": {"model", "kernels"},
-    "rig": {"engine", "outputs"},
+    "rig": {"model", "engine", "outputs"},
     "stages": {"model", "engine", "closed_form", "baselines", "outputs", "rig"},
     "cli": {"model", "engine", "closed_form", "baselines", "outputs", "rig", "stages"},
     "__init__": set(),

@@ -20,7 +20,7 @@ from pathlib import Path
 from impact import __version__
 from impact.closed_form.pushover import PATTERNS as PUSHOVER_PATTERNS
 from impact.closed_form.tmd import tuned_for
-from impact.model.kinds import KINDS, DamperKind, either, kinds_with
+from impact.model.kinds import CID, KINDS, DamperKind, either, kinds_with
 from impact.model.params import (
     IMPACT_KINDS,
     MAX_TUNING,
@@ -85,7 +85,7 @@ PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
 def _model_flags(ap: argparse.ArgumentParser) -> None:
     g = ap.add_argument_group("model (model units: M = 1, omega = 1)")
-    g.add_argument("--damper", choices=IMPACT_KINDS, default="cid",
+    g.add_argument("--damper", choices=IMPACT_KINDS, default=CID,
                    help="classical (free mass) or pendulum impact damper")
     g.add_argument("--mu", type=_ranged(0, 10, lo_open=True), default=DEFAULTS["mu"],
                    help="mass ratio m/M, in (0, 10]")
@@ -529,7 +529,7 @@ def _design_equations(args) -> dict:
     from impact.stages.design import load_charts
     from impact.stages.design.equations.formulas import Point, evaluate, tmd_equations
 
-    kind = args.damper or "cid"
+    kind = args.damper or CID
     if not KINDS[kind].walls:
         return tmd_equations(args.mu, args.beta)
     answer = evaluate(kind, Point(args.mu, args.e, args.beta, args.rp if KINDS[kind].spring else 0.0))
@@ -640,8 +640,9 @@ def cmd_compile(args) -> dict:
 
     start = time.perf_counter()
     compile_scene_loops()
-    for kind, friction in (("cid", False), ("cid", True), ("pid", False)):
-        ensure_compiled(kind, friction)
+    for kind in kinds_with("paper"):
+        for friction in (False, True) if KINDS[kind].slides else (False,):
+            ensure_compiled(kind, friction)
     warm_up()
     return {"compiled": "every kernel of the study", "cache": os.fspath(_cache_folder()),
             "seconds": round(time.perf_counter() - start, 1)}

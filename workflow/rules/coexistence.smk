@@ -10,7 +10,7 @@ rule continuation_curve:
     benchmark:
         "results/benchmarks/continuation_curve/{curve}_{mode}.tsv"
     wildcard_constraints:
-        curve="cid_[A-Za-z0-9_.]+",
+        curve=CID_CURVE,
         mode="continuation_up|continuation_down",
     conda:
         ENV
@@ -33,7 +33,7 @@ rule ensemble_curve:
     benchmark:
         "results/benchmarks/ensemble_curve/{curve}.tsv"
     wildcard_constraints:
-        curve="cid_[A-Za-z0-9_.]+",
+        curve=CID_CURVE,
     conda:
         ENV
     threads: 1
@@ -66,7 +66,7 @@ rule coexistence_figure:
     benchmark:
         "results/benchmarks/coexistence_figure/{curve}.tsv"
     wildcard_constraints:
-        curve="cid_[A-Za-z0-9_.]+",
+        curve=CID_CURVE,
     conda:
         ENV
     threads: 1
@@ -97,7 +97,7 @@ rule hysteresis_figure:
     benchmark:
         "results/benchmarks/hysteresis_figure/{curve}.tsv"
     wildcard_constraints:
-        curve="cid_[A-Za-z0-9_.]+",
+        curve=CID_CURVE,
     conda:
         ENV
     threads: 1

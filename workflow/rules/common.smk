@@ -24,10 +24,10 @@ from impact.stages.buildings import shared_keys, wildcard
 from impact.stages.ida import plan as ida
 from impact.stages.collapse import plan as collapse
 from impact.model.params import IMPACT_KINDS
-from impact.model.kinds import kind_of
+from impact.model.kinds import CID, kind_of
 from impact.model.scene import DAMPER_KINDS
 from impact.stages.design import chart_specs
-from impact.stages.robustness.designs import design_names
+from impact.stages.robustness.designs import design_curves, design_names
 from impact.stages.sweeps import all_curves, check_config, figure_curves, friction_scale
 from impact.model.params import curve_id
 
@@ -70,6 +70,8 @@ check_config(config)
 # the wildcard patterns of the damper kinds, from the model's registries: a new kind matches every rule
 ANY_KIND = "|".join(DAMPER_KINDS)
 WALLED_KIND = "|".join(IMPACT_KINDS)
+# the curves of the CID, whose coexisting steady states the coexistence stage traces
+CID_CURVE = f"{CID}_[A-Za-z0-9_.]+"
 
 FIGURES = list(config["figures"])
 CURVES = all_curves(config)
@@ -212,9 +214,7 @@ def executor_name(wildcards):
 
 def robustness_curves():
     """The sweeps whose optimum gaps are the robustness stage's CID and PID design points."""
-    rb = config["robustness"]
-    specs = [{"damper": "cid", "mu": rb["mu"], "e": rb["e"]}]
-    specs += [{"damper": "pid", "mu": rb["mu"], "e": rb["e"], "rp": rp} for rp in rb["pid_tunings"]]
+    specs = design_curves(config)
     missing = [curve_id(s) for s in specs if curve_id(s) not in CURVES]
     if missing:
         raise WorkflowError(

@@ -32,7 +32,7 @@ rule masri_check:
         grid=config["masri"]["grid"],
         structure=config["structure"],
         protocol={k: config["protocol"][k] for k in ("periods", "average_from")},
-        starts=config["protocol"]["starts"]["cid"],
+        starts=config["protocol"]["starts"][CID],
     script:
         "../scripts/masri_check.py"
 
@@ -76,7 +76,7 @@ rule masri_branches:
         branches=config["masri"]["branches"],
         structure=config["structure"],
         protocol={k: config["protocol"][k] for k in ("periods", "average_from")},
-        starts=config["protocol"]["starts"]["cid"],
+        starts=config["protocol"]["starts"][CID],
     script:
         "../scripts/masri_branches.py"
 

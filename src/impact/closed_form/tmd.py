@@ -58,6 +58,7 @@ import numpy as np
 from scipy.optimize import brentq, minimize, minimize_scalar
 
 from impact.model.building import Building
+from impact.model.kinds import TMD
 from impact.model.params import ParameterError, a_max
 from impact.model.scene import Damper
 
@@ -221,7 +222,7 @@ def tuned_for(building: Building, mass_ratio: float) -> Damper:
     design, and impact quake's TMD where its tuning and damping are not given)."""
     mass = mass_ratio * building.total_mass
     tuning = den_hartog(mass / first_modal_mass(building))
-    return Damper("tmd", mass=mass, tuning=tuning["f"], damping=tuning["beta_t"])
+    return Damper(TMD, mass=mass, tuning=tuning["f"], damping=tuning["beta_t"])
 
 
 def nishihara_asami(mu):

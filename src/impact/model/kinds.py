@@ -49,6 +49,17 @@ KINDS: dict[str, DamperKind] = {
 }
 
 
+def _registered(name: str) -> str:
+    return KINDS[name].name
+
+
+#: The kinds the study compares, by name: the paper's two impact dampers and the tuned mass damper they are judged
+#: against.  A plan that names one of them (the paper's figures, Table 1's columns, the study's designs) reads it
+#: here; a branch on what a kind is made of reads its parts (``KINDS[name].walls``, ...), never its name, so a new
+#: kind needs an edit of neither.
+CID, PID, TMD = _registered("cid"), _registered("pid"), _registered("tmd")
+
+
 def damper_kinds() -> tuple[str, ...]:
     """The kinds' names, in the registry's order (read at call time: a kind registered later is listed)."""
     return tuple(KINDS)
@@ -77,6 +88,13 @@ def linear_kinds() -> tuple[str, ...]:
 def sliding_kinds() -> str:
     """The kinds whose mass may slide on its floor, as a message names them ('cid', or 'cid' or 'x')."""
     return either(map(repr, kinds_with("slides")))
+
+
+def is_free_mass(name: str) -> bool:
+    """Whether the kind is Masri's: a free mass between walls, with no spring (the CID), the one kind whose 2-EIPC
+    steady state the closed form (impact.closed_form) knows."""
+    k = KINDS[name]
+    return k.walls and not k.spring
 
 
 def kind_of(name: str) -> DamperKind:

@@ -106,7 +106,7 @@ def friction_acceleration(nu: float, frequency_hz: float, unit_m: float) -> floa
 class System:
     """One impact-damper system (structure + damper), model units.
 
-    kind          'cid' (free mass, Masri's classical damper) or 'pid' (linearised pendulum)
+    kind          a kind with walls (model.kinds): the CID (Masri's free mass) or the PID (linearised pendulum)
     mu            mass ratio m/M
     beta          structural damping ratio
     e             coefficient of restitution

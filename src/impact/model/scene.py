@@ -47,7 +47,7 @@ DAMPER_KINDS = damper_kinds()  # the registry's kinds (model.kinds), as the stud
 class Damper:
     """One damper, possibly split into `units` identical units on the same floor.
 
-    kind     'cid' (free mass between walls), 'pid' (pendulum between walls), 'tmd' (spring and dashpot)
+    kind     a kind of model.kinds.KINDS: CID (free mass between walls), PID (pendulum), TMD (spring, dashpot)
     mass     total mass of the damper (all units together)
     gap      total clearance d of each unit (CID, PID)
     e        coefficient of restitution (CID, PID)

@@ -5,12 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from impact.model.kinds import damper_kinds
 from impact.outputs.ida_figures import CASE_COLORS
 from impact.outputs.labels import label
 from impact.outputs.plotting import plt, save_all
 
-#: dampers that change the collapse little draw over one another: each its own dash
-LINESTYLES = {"bare": "-", "cid": "--", "pid": "-.", "tmd": ":"}
+#: dampers that change the collapse little draw over one another: each its own dash, the bare building solid
+DASHES = ("--", "-.", ":", (0, (5, 1, 1, 1, 1, 1)), (0, (1, 3)))
+LINESTYLES = {"bare": "-", **{kind: DASHES[i % len(DASHES)] for i, kind in enumerate(damper_kinds())}}
 
 
 def _pushover_panel(ax, bare) -> None:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 import re
 
+from impact.model.kinds import KINDS
 from impact.model.params import IMPACT_KINDS
 
 #: the status of a numerics run its time budget stopped (``failed: too slow ...``), which the figures mark
@@ -29,7 +30,7 @@ RUN_MEASURES = {
     "event_cap_reached": ("the run stopped at the engine's event cap", None),
 }
 
-DAMPERS = {"cid": "CID", "pid": "PID", "tmd": "TMD", "bare": "bare", "none": "bare"}
+DAMPERS = {**{name: name.upper() for name in KINDS}, "bare": "bare", "none": "bare"}
 
 #: the measures the loads stage compares with the bare building
 LOAD_MEASURES = {"peak_roof": "peak roof displacement", "rms_roof": "RMS roof displacement",

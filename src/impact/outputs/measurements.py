@@ -44,13 +44,14 @@ from typing import Any
 import netCDF4
 import numpy as np
 
+from impact.model.kinds import impact_kinds, kind_of
 from impact.outputs.files import atomic_path
 
 FORMAT_VERSION = 1
 KINDS = ("free_decay", "forced_sweep_point", "drop_test")
 TIME_KINDS = ("free_decay", "forced_sweep_point")
 UNITS = {"m": 1.0, "mm": 1e-3}  # metres per record unit
-DAMPERS = ("none", "pid", "cid")
+DAMPERS = ("none", *impact_kinds())  # a rig carries no damper or an impact damper (model.kinds)
 
 TIME_COLUMNS = ("t_s", "x")
 OPTIONAL_TIME_COLUMNS = ("s",)
@@ -124,9 +125,9 @@ def _required_fields(header: Mapping[str, Any]) -> list[str]:
         else:
             req.append("r")
         damper = header.get("damper")
-        if damper in ("pid", "cid"):
+        if damper in impact_kinds():
             req += ["mu", "gap_mm"]
-            if damper == "pid":
+            if kind_of(damper).spring:
                 req.append("rp")
     elif kind == "drop_test":
         req += ["mu", "wall"]
@@ -222,8 +223,9 @@ def validate_header(raw: Mapping[str, Any]) -> dict[str, Any]:
             if "wall" not in header and "e" not in header:
                 raise MeasurementError(f"header field wall missing (damper {header['damper']} needs "
                                   "the wall material or e)")
-            if header["damper"] == "cid" and "rp" in header:
-                raise MeasurementError("header field rp does not apply to damper cid")
+            if not kind_of(header["damper"]).spring and "rp" in header:
+                raise MeasurementError(f"header field rp does not apply to damper {header['damper']} (it has no "
+                                       "spring)")
         if all(k in header for k in ("r", "forcing_hz", "structure_hz")):
             expected = header["r"] * header["structure_hz"]
             if abs(header["forcing_hz"] - expected) > FORCING_RTOL * expected:

@@ -11,7 +11,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from impact.model.kinds import damper_kinds, kind_of  # noqa: E402
+from impact.model.kinds import CID, PID, TMD, damper_kinds, kind_of  # noqa: E402
 from impact.model.params import curve_id  # noqa: E402
 from impact.outputs.files import atomic_path  # noqa: E402
 from impact.outputs.labels import TOO_SLOW  # noqa: E402
@@ -428,7 +428,7 @@ def plot_design_charts(charts: dict, outputs) -> None:
     width shows their contour labels."""
     from matplotlib.colors import BoundaryNorm
 
-    cid, pid, tmd = charts["cid"], charts["pid"], charts["tmd"]
+    cid, pid, tmd = charts[CID], charts[PID], charts[TMD]
     es = cid["e"].values
     norm = BoundaryNorm(XM_LEVELS, plt.get_cmap("viridis_r").N, extend="max")
     fig, axes = plt.subplots(len(es) + 1, 2, figsize=(11.0, 3.7 * (len(es) + 1)), squeeze=False,

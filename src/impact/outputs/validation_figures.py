@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 # pyplot as the outputs layer sets it up, on the file-only Agg backend (no display on a cluster node)
+from impact.model.kinds import PID
 from impact.outputs.plotting import plt, save_atomic
 
 
@@ -68,7 +69,7 @@ def plot_fig5(data: dict, paths) -> list[Path]:
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
     a = data["a"]["data"]
     for who, m, c in (("rig", ".", "C0"), ("model", "x", "C3")):
-        sel = (a.source == who) & (a.system == "pid")
+        sel = (a.source == who) & (a.system == PID)
         ax1.plot(a.loc[sel, "amplitude_mm"], a.loc[sel, "delta_minus_bare"], m, ms=3, color=c,
                  label=f"{who}, with PID")
         sel = (a.source == who) & (a.system == "bare")

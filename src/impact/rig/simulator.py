@@ -85,6 +85,7 @@ from numba import njit
 from scipy import integrate, optimize
 
 from impact.engine.jitcache import compile_lock
+from impact.model.kinds import PID
 from impact.outputs.measurements import Measurement, make_measurement
 from impact.rig.config import validation_config
 
@@ -763,7 +764,7 @@ def _header_common(spec: RigSpec, kind: str, seed: int, *, wall_name: str | None
         "synthetic": True,
         "sample_rate_hz": spec.sample_rate_hz,
         "units": "mm",
-        "damper": "none" if spec.m == 0.0 else "pid",
+        "damper": "none" if spec.m == 0.0 else PID,
         "structure_hz": spec.structure_hz,
         "noise_rms": spec.noise_m * 1e3 if spec.sensor else 0.0,
         "seed": int(seed),

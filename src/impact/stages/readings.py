@@ -24,6 +24,7 @@ from scipy.optimize import minimize_scalar
 
 from impact.closed_form.masri import BRANCHES, forced_flow, masri_2eipc
 from impact.engine.paper import simulate
+from impact.model.kinds import is_free_mass
 from impact.model.params import Protocol, System
 
 R_TOL = 1e-7       # refinement tolerance in r: a smooth peak's value to (R_TOL/beta)^2/2 ~ 2e-10 at beta = 0.0048
@@ -67,8 +68,8 @@ def orbit_window_amplitude(root: dict, beta: float, r: float, force_ratio: float
 def closed_form_amplitude(system: System, r: float, protocol: Protocol) -> float:
     """The protocol's amplitude of the stable, admissible 2-EIPC orbit at r (the largest, if both
     roots are); NaN where there is none.  Frictionless CID only: the closed form knows no friction."""
-    if system.kind != "cid" or system.nu != 0.0:
-        raise ValueError("the 2-EIPC closed form is the frictionless CID's (kind 'cid', nu = 0)")
+    if not is_free_mass(system.kind) or system.nu != 0.0:
+        raise ValueError("the 2-EIPC closed form is the frictionless CID's (a free mass between walls, nu = 0)")
     sol = masri_2eipc(system.mu, system.e, system.beta, r, system.gap, system.force_ratio)
     amplitudes = [orbit_window_amplitude(sol[b], system.beta, r, system.force_ratio, system.phase,
                                          protocol.t_window, protocol.t_end)
@@ -135,7 +136,7 @@ def add_readings(ds, systems, protocols) -> None:
     ds["X_m_refined"] = (dims, peaks[..., 0] / a_max, {"units": "1", "long_name": "refined amplitude ratio X_m"})
     ds["r_at_max_refined"] = (dims, peaks[..., 1], {
         "units": "1", "long_name": "frequency ratio of the refined largest amplitude"})
-    if systems[0].kind != "cid" or systems[0].nu != 0.0:
+    if not is_free_mass(systems[0].kind) or systems[0].nu != 0.0:
         return
     closed = np.array([closed_form_sweep(system, r, protocols[0]) for system in systems])
     ds["amplitude_closed_form"] = (("gap_ratio", "freq_ratio"), closed, {

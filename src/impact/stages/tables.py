@@ -13,6 +13,7 @@ import math
 import numpy as np
 import pandas as pd
 
+from impact.model.kinds import CID, PID
 from impact.model.params import curve_id
 from impact.outputs.datasets import optimum, two_ipc_range
 
@@ -20,11 +21,11 @@ TOLERANCE = 0.10
 
 
 def _cid(mu, e):
-    return {"damper": "cid", "mu": mu, "e": e}
+    return {"damper": CID, "mu": mu, "e": e}
 
 
 def _pid(mu, e, rp):
-    return {"damper": "pid", "mu": mu, "e": e, "rp": rp}
+    return {"damper": PID, "mu": mu, "e": e, "rp": rp}
 
 
 # (figure, case, curve spec, quantity, paper value)
@@ -44,7 +45,7 @@ TWO_IPC_RANGES = [
 ]
 E_TREND_PID = [(rp, [_pid(0.01, e, rp) for e in (0.25, 0.45, 0.65)]) for rp in (0.5, 1.0, 1.5)]
 TMD_PAPER = {"f": 0.99, "beta_t": 0.06}
-FRICTION = [{"damper": "cid", "mu": 0.01, "e": 0.25, **({"nu": nu} if nu else {})} for nu in (0.0, 0.05, 0.2, 0.5)]
+FRICTION = [{"damper": CID, "mu": 0.01, "e": 0.25, **({"nu": nu} if nu else {})} for nu in (0.0, 0.05, 0.2, 0.5)]
 
 
 def needed_curves() -> list:

@@ -27,6 +27,7 @@ import xarray as xr
 
 from impact.closed_form.tmd import tmd_optimum, tmd_peak
 from impact.engine.paper import sweep
+from impact.model.kinds import KINDS, TMD
 from impact.model.params import ParameterError, Protocol, System, a_max, frequency_grid
 from impact.model.scene import DAMPER_KINDS
 from impact.stages.robustness.designs import Design
@@ -45,15 +46,11 @@ class DesignError(ValueError):
 # ----------------------------------------------------------------------------
 
 def chart_specs(design_cfg: dict, kind: str) -> list[dict]:
-    """The sweep curves a CID or PID chart reads: every (e, mu[, r']) of the design section."""
-    specs = []
-    for e in design_cfg["e"]:
-        for mu in design_cfg["mu"]:
-            if kind == "cid":
-                specs.append({"damper": "cid", "mu": mu, "e": e})
-            else:
-                specs += [{"damper": "pid", "mu": mu, "e": e, "rp": rp} for rp in design_cfg["pid_tunings"]]
-    return specs
+    """The sweep curves an impact damper's chart reads: every (e, mu[, r']) of the design section, r' (the
+    design section's pid_tunings) for a kind with a spring."""
+    tunings = [{"rp": rp} for rp in design_cfg["pid_tunings"]] if KINDS[kind].spring else [{}]
+    return [{"damper": kind, "mu": mu, "e": e, **tuning}
+            for e in design_cfg["e"] for mu in design_cfg["mu"] for tuning in tunings]
 
 
 def chart_config(cfg: dict) -> dict:
@@ -66,7 +63,7 @@ def chart_config(cfg: dict) -> dict:
 
 def _axes(kind: str, specs: list[dict]) -> dict:
     axes = {"e": sorted({s["e"] for s in specs}), "mu": sorted({s["mu"] for s in specs})}
-    if kind == "pid":
+    if KINDS[kind].spring:
         axes["rp"] = sorted({s["rp"] for s in specs})
     return axes
 
@@ -145,7 +142,7 @@ def tmd_chart(mu_values, beta: float, force_ratio: float, protocol: dict, r) -> 
             "damping": ("mu", [o["beta_t"] for o in optima], {"long_name": "TMD damping ratio beta_t",
                                                                "units": "1"})}
     ds = xr.Dataset(data, coords={"mu": ("mu", mu_values, AXIS_ATTRS["mu"])})
-    ds.attrs.update(design_point(beta, force_ratio, protocol, r, "structure and TMD at rest"), kind="tmd",
+    ds.attrs.update(design_point(beta, force_ratio, protocol, r, "structure and TMD at rest"), kind=TMD,
                     title="Design chart: X_m of the TMD at its equal-peak optimum",
                     reading="the equal-peak optimum's largest peak over r = 0.5 to 1.5 (closed form)")
     return ds
@@ -217,14 +214,16 @@ def _impact_candidates(chart, amplitude_range) -> list[Candidate]:
 
 
 def _tmd_candidates(chart) -> list[Candidate]:
-    return [Candidate("tmd", {"mu": float(mu), "tuning": float(f), "damping": float(bt)}, float(x), float(x), 1.0)
+    return [Candidate(TMD, {"mu": float(mu), "tuning": float(f), "damping": float(bt)}, float(x), float(x), 1.0)
             for mu, x, f, bt in zip(chart["mu"].values, chart["X_m"].values, chart["tuning"].values,
                                     chart["damping"].values)]
 
 
 def candidates(chart, amplitude_range=None) -> list[Candidate]:
     """Every design on a chart, with its X_m at the design force and its worst over the amplitude range."""
-    return _tmd_candidates(chart) if chart.attrs["kind"] == "tmd" else _impact_candidates(chart, amplitude_range)
+    if KINDS[chart.attrs["kind"]].walls:
+        return _impact_candidates(chart, amplitude_range)
+    return _tmd_candidates(chart)
 
 
 def _describe(c: Candidate) -> str:
@@ -265,7 +264,7 @@ def simulate_design(chart, params: dict, refinement: int, scale: float = 1.0) ->
     scale: the force over the design force (the physical gap as designed): by similarity, the gap ratio / s."""
     kind, attrs = chart.attrs["kind"], chart.attrs
     protocol = Protocol(periods=attrs["periods"], average_from=attrs["average_from"])
-    if kind == "tmd":
+    if not KINDS[kind].walls:
         return _simulate_tmd(chart, params, protocol)
 
     system = System.from_gap_ratio(kind, mu=params["mu"], beta=attrs["beta"], e=params["e"],
@@ -284,7 +283,7 @@ def _simulate_tmd(chart, params: dict, protocol: Protocol) -> float:
     """The TMD on the scene core over the chart's frequencies and its two closed-form peaks."""
 
     attrs = chart.attrs
-    design = Design("tmd", mu=params["mu"], beta=attrs["beta"], tuning=params["tuning"],
+    design = Design(attrs["kind"], mu=params["mu"], beta=attrs["beta"], tuning=params["tuning"],
                     damping=params["damping"], force_ratio=attrs["force_ratio"])
     # each side's largest peak (equal at the optimum) on the grid too, so the check finds the true maximum
     peaks = [tmd_peak(params["mu"], attrs["beta"], params["tuning"], params["damping"], lo, hi,
@@ -313,7 +312,7 @@ def design(charts: dict, target: float, amplitude_range=None, refinement: int = 
         chart = charts[cand.kind]
         simulated = simulate_design(chart, cand.params, refinement)
         answer = _answer(cand, chart, target, simulated, amplitude_range)
-        if amplitude_range is not None and cand.kind != "tmd":
+        if amplitude_range is not None and KINDS[cand.kind].walls:
             answer["xm_simulated_range"] = simulate_design(chart, cand.params, refinement, cand.worst_scale)
         if _meets(answer, target):
             answer["rejected"] = rejected
@@ -339,9 +338,9 @@ def _answer(cand: Candidate, chart, target: float, simulated: float, amplitude_r
            "target_xm": target, "xm_chart": cand.xm_chart, "xm_simulated": simulated,
            "margin_chart": target - cand.xm_chart, "margin_simulated": target - simulated,
            "design_point": chart.attrs["design_point"]}
-    if cand.kind == "pid":
+    if "rp" in p:
         out["rp"] = p["rp"]
-    if cand.kind == "tmd":
+    if not KINDS[cand.kind].walls:
         out.update(tuning=p["tuning"], damping=p["damping"])
     else:
         out["starts"] = [str(s) for s in chart["start"].values]

@@ -23,6 +23,7 @@ from impact.closed_form.masri import BRANCHES, masri_2eipc, orbit_initial_state,
 from impact.engine import layout as L
 from impact.engine import paper_loop as K
 from impact.engine.paper import simulate
+from impact.model.kinds import CID
 from impact.model.params import Protocol, System, a_max, frequency_grid
 from impact.outputs.files import as_integers, flag
 from impact.stages.masri.charts import branches
@@ -32,7 +33,7 @@ LANDING_TOLERANCE = 1e-3
 
 
 def _orbit_system(mu, e, beta, gap, force_ratio, root) -> System:
-    return System("cid", mu=mu, beta=beta, e=e, gap=gap, force_ratio=force_ratio,
+    return System(CID, mu=mu, beta=beta, e=e, gap=gap, force_ratio=force_ratio,
                   phase=math.remainder(float(root["force_phase"]), 2 * math.pi))
 
 
@@ -141,7 +142,7 @@ def _growth_rate(comp: np.ndarray, root: dict, r: float) -> tuple[float, float]:
 
 def check_from_rest(mu, e, beta, r, gap, force_ratio, amp_stable, start: str, protocol: Protocol) -> dict:
     """The paper's protocol: does a run from rest land on the stable 2-EIPC orbit?"""
-    system = System("cid", mu=mu, beta=beta, e=e, gap=gap, force_ratio=force_ratio)
+    system = System(CID, mu=mu, beta=beta, e=e, gap=gap, force_ratio=force_ratio)
     res = simulate(system, r, Protocol(periods=protocol.periods, average_from=protocol.average_from, start=start))
     # 1e-3: near the band's edges |lambda| -> 1 and the transient left in the
     # window (~|lambda|^impacts) is far above round-off; the difference is kept
@@ -281,7 +282,7 @@ def branches_dataset(cfg: dict, beta: float, force_ratio: float, protocol: Proto
     amp = np.stack([table[table["root"] == name]["amplitude_over_xst"].to_numpy() for name in BRANCHES])
     stable = np.stack([table[table["root"] == name]["stable"].to_numpy() for name in BRANCHES]).astype(np.int8)
     gap = cfg["gap_ratio"] * a_max(beta, force_ratio)
-    system = System("cid", mu=cfg["mu"], beta=beta, e=cfg["e"], gap=gap, force_ratio=force_ratio)
+    system = System(CID, mu=cfg["mu"], beta=beta, e=cfg["e"], gap=gap, force_ratio=force_ratio)
     sim = np.empty((len(starts), len(r)))
     aipc = np.empty((len(starts), len(r)))
     for i, start in enumerate(starts):

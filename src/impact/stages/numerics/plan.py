@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 
+from impact.model.kinds import CID, PID
 from impact.model.params import System, a_max
 
 K_IMPACTS = 20
@@ -48,11 +49,11 @@ def _chosen(cases: dict, chosen, key: str) -> dict:
 def _all_work_precision_cases(periods: float) -> dict:
     paper = dict(mu=0.01, beta=0.0048, e=0.25)
     return {
-        "cid_2eipc": (System.from_gap_ratio("cid", gap_ratio=1.6, **paper), 1.0, "left", periods),
-        "cid_irregular": (System.from_gap_ratio("cid", mu=0.01, beta=0.0048, e=0.65, gap_ratio=0.5), 0.97,
+        "cid_2eipc": (System.from_gap_ratio(CID, gap_ratio=1.6, **paper), 1.0, "left", periods),
+        "cid_irregular": (System.from_gap_ratio(CID, mu=0.01, beta=0.0048, e=0.65, gap_ratio=0.5), 0.97,
                           "centre", periods),
-        "pid_tuned": (System.from_gap_ratio("pid", gap_ratio=1.0, rp=1.0, **paper), 1.0, "centre", periods),
-        "cid_friction": (System.from_gap_ratio("cid", gap_ratio=1.6, nu=0.05, **paper), 1.0, "left", periods),
+        "pid_tuned": (System.from_gap_ratio(PID, gap_ratio=1.0, rp=1.0, **paper), 1.0, "centre", periods),
+        "cid_friction": (System.from_gap_ratio(CID, gap_ratio=1.6, nu=0.05, **paper), 1.0, "left", periods),
     }
 
 
@@ -98,7 +99,7 @@ def _all_extreme_cases() -> dict:
 
     def cid(**kw):
         g = kw.pop("gap_ratio", 1.0)
-        return System.from_gap_ratio("cid", gap_ratio=g, **{**base, **kw})
+        return System.from_gap_ratio(CID, gap_ratio=g, **{**base, **kw})
 
     amax = a_max(0.0048, 0.096)
     bare = 0.096 / math.hypot(1 - 0.95 ** 2, 2 * 0.0048 * 0.95)  # bare amplitude at r = 0.95
@@ -109,14 +110,14 @@ def _all_extreme_cases() -> dict:
         "e=1": (cid(e=1.0), 1.0, "centre"),
         "g=1e-3": (cid(gap_ratio=1e-3), 1.0, "centre"),
         "g=1e-6": (cid(gap_ratio=1e-6), 1.0, "centre"),
-        "beta=0": (System("cid", mu=0.01, beta=0.0, e=0.25, gap=1.0), 0.97, "centre"),
-        "beta=1e-5": (System("cid", mu=0.01, beta=1e-5, e=0.25, gap=1.0), 1.0, "centre"),
+        "beta=0": (System(CID, mu=0.01, beta=0.0, e=0.25, gap=1.0), 0.97, "centre"),
+        "beta=1e-5": (System(CID, mu=0.01, beta=1e-5, e=0.25, gap=1.0), 1.0, "centre"),
         "mu=1e-4": (cid(mu=1e-4), 1.0, "centre"),
         "mu=0.5": (cid(mu=0.5), 1.0, "centre"),
-        "stiff pendulum r'=100": (System.from_gap_ratio("pid", gap_ratio=1e-3, rp=100.0, **base), 1.0, "left"),
+        "stiff pendulum r'=100": (System.from_gap_ratio(PID, gap_ratio=1e-3, rp=100.0, **base), 1.0, "left"),
         # the damper mass rests against the left wall and the structure's steady swing
         # just reaches the right wall: grazing contact
-        "grazing": (System("cid", mu=1e-6, beta=0.0048, e=0.5, gap=2 * bare * (1 + 1e-9)), 0.95, "centre"),
+        "grazing": (System(CID, mu=1e-6, beta=0.0048, e=0.5, gap=2 * bare * (1 + 1e-9)), 0.95, "centre"),
         "friction nu=5": (cid(nu=5.0, gap_ratio=1.6), 1.0, "left"),
     } | ({} if amax else {})
 

@@ -10,8 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from impact.model.kinds import CID, KINDS, PID, TMD, damper_kinds
 from impact.model.params import MAX_TUNING, a_max, check_choice, check_fields
-from impact.model.scene import DAMPER_KINDS
 from impact.outputs.datasets import optimum
 
 BAND = 0.25   # "X_m stays within 25 % of its design value"
@@ -21,7 +21,7 @@ BAND = 0.25   # "X_m stays within 25 % of its design value"
 class Design:
     """One damper at its design point on the paper's structure (model units).
 
-    kind        'cid', 'pid' or 'tmd'
+    kind        a damper kind (model.kinds): the study designs the CID, the PID and the TMD
     mu          mass ratio m/M
     beta        the structure's damping ratio
     gap_ratio   g = d / A_max at the design force (CID, PID)
@@ -44,7 +44,7 @@ class Design:
     units: int = 1
 
     def __post_init__(self):
-        check_choice("kind", self.kind, DAMPER_KINDS)
+        check_choice("kind", self.kind, damper_kinds())  # read now: a kind registered later is a kind
         check_fields(self, mu="(0, 10]", beta="(0, 1)", gap_ratio="[0, 1e6]", e="[0, 1]",
                      tuning=f"[0, {MAX_TUNING:g}]", damping="[0, 1)", force_ratio="(0, 1e12]")
 
@@ -75,7 +75,7 @@ def bare_amplitude(design: Design, conditions: Conditions = Conditions()) -> flo
 def has_paper_form(design: Design) -> bool:
     """Whether the design is one undamped CID or PID unit: the paper's system (:func:`paper_system`), which the
     engine runs on its fast loop."""
-    return design.kind != "tmd" and design.damping == 0.0 and design.units == 1
+    return KINDS[design.kind].paper and design.damping == 0.0 and design.units == 1
 
 
 # each variation: its dimension, long name, and how a design is changed along it
@@ -96,34 +96,43 @@ MEASURES = {
 
 
 def applicable(kind: str) -> tuple[str, ...]:
-    """The variations that change a damper of this kind: no damping in a CID, no restitution in a TMD."""
-    return {"cid": ("scale", "drift", "e"), "pid": ("scale", "drift", "damping", "e"),
-            "tmd": ("scale", "drift", "damping")}[kind]
+    """The variations that change a damper of this kind: its damping if it has a dashpot (not the CID), its
+    restitution if it has walls (not the TMD); the force's scale and the structure's drift change every kind."""
+    parts = KINDS[kind]
+    return ("scale", "drift") + ("damping",) * parts.dashpot + ("e",) * parts.walls
 
 
 def design_names(cfg: dict) -> list[str]:
     """The designs of the configuration: the CID from each start, the PID per tuning and start, the TMD."""
     rb, starts = cfg["robustness"], cfg["protocol"]["starts"]
-    names = [f"cid_{s}" for s in starts["cid"]]
-    names += [f"pid_rp{rp:g}_{s}" for rp in rb["pid_tunings"] for s in starts["pid"]]
-    return names + ["tmd"]
+    names = [f"{CID}_{s}" for s in starts[CID]]
+    names += [f"{PID}_rp{rp:g}_{s}" for rp in rb["pid_tunings"] for s in starts[PID]]
+    return names + [TMD]
+
+
+def design_curves(cfg: dict) -> list[dict]:
+    """The sweep curves whose optimum gaps are the impact dampers' design points: the CID's and the PID's at
+    each tuning, of the robustness section's mass ratio and restitution."""
+    rb = cfg["robustness"]
+    return ([{"damper": CID, "mu": rb["mu"], "e": rb["e"]}]
+            + [{"damper": PID, "mu": rb["mu"], "e": rb["e"], "rp": rp} for rp in rb["pid_tunings"]])
 
 
 def designs_from_study(cfg: dict, optima: dict, tmd: dict) -> dict:
-    """Each design at its optimum: ``optima`` maps 'cid' and 'pid_rp<r'>' to (start -> optimum g), from the
+    """Each design at its optimum: ``optima`` maps the CID and 'rp<r'>' (a PID's tuning) to (start -> optimum g), from the
     sweeps; ``tmd`` is the equal-peak optimum (f, beta_t).  Returns name -> Design fields (JSON-ready)."""
     rb, beta, f0 = cfg["robustness"], cfg["structure"]["beta"], cfg["structure"]["force_ratio"]
     out = {}
     for name in design_names(cfg):
-        if name == "tmd":
-            design = Design("tmd", rb["mu"], beta, tuning=tmd["f"], damping=tmd["beta_t"], force_ratio=f0)
+        if name == TMD:
+            design = Design(TMD, rb["mu"], beta, tuning=tmd["f"], damping=tmd["beta_t"], force_ratio=f0)
         else:
             kind, *tag, start = name.split("_")
-            rp = float(tag[0][2:]) if kind == "pid" else 0.0
-            g = optima[kind if kind == "cid" else tag[0]][start]
+            rp = float(tag[0][2:]) if KINDS[kind].spring else 0.0
+            g = optima[tag[0] if tag else kind][start]
             if not math.isfinite(g):
                 raise ValueError(f"design {name}: its sweep has no optimum gap (every X_m is NaN)")
-            design = Design(kind, rb["mu"], beta, gap_ratio=g, e=rb["e"], tuning=rp if kind == "pid" else 1.0,
+            design = Design(kind, rb["mu"], beta, gap_ratio=g, e=rb["e"], tuning=rp if KINDS[kind].spring else 1.0,
                             start=start, force_ratio=f0)
         out[name] = dict(design.__dict__)
     return out
@@ -131,7 +140,7 @@ def designs_from_study(cfg: dict, optima: dict, tmd: dict) -> dict:
 
 def stroke_cap(designs: dict) -> float:
     """What the TMD's stroke is held to: half the smallest CID design's gap (the CID's space, as designed)."""
-    cids = [Design(**d) for d in designs.values() if d["kind"] == "cid"]
+    cids = [Design(**d) for d in designs.values() if d["kind"] == CID]
     if not cids:
         raise ValueError("no CID design to take the gap from")
     return 0.5 * min(cids, key=lambda d: d.gap_ratio).gap
@@ -156,12 +165,13 @@ def grids(cfg: dict, tmd_beta_t: float) -> dict:
 
 
 def optima_from_sweeps(datasets) -> dict:
-    """'cid' or 'rp<r'>' -> (start -> optimum gap ratio), from sweep datasets (their 'curve' attribute)."""
+    """The CID or 'rp<r'>' (a PID's tuning) -> (start -> optimum gap ratio), from sweep datasets (their 'curve'
+    attribute)."""
 
     out = {}
     for ds in datasets:
         spec = json.loads(ds.attrs["curve"])
-        key = "cid" if spec["damper"] == "cid" else f"rp{spec['rp']:g}"
+        key = f"rp{spec['rp']:g}" if KINDS[spec["damper"]].spring else spec["damper"]
         out[key] = {str(s): optimum(ds, str(s))[0] for s in ds["start"].values}
     return out
 

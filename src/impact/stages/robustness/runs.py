@@ -11,6 +11,7 @@ import xarray as xr
 
 from impact.engine.run import simulate
 from impact.model.building import Building
+from impact.model.kinds import KINDS
 from impact.model.params import Protocol, System, a_max
 from impact.model.scene import Damper, Harmonic, Scene, paper_scene_from_system
 from impact.stages.robustness.designs import (
@@ -33,16 +34,17 @@ def design_scene(design: Design, r: float, protocol: Protocol, conditions: Condi
     unit_starts: each unit's initial place between its walls (default: all at the design's start)."""
     w = conditions.frequency
     building = Building.explicit([1.0], [w * w], zeta=design.beta)
-    if design.kind == "tmd":
-        damper = Damper("tmd", mass=design.mu, tuning=design.tuning / w, damping=design.damping)
+    parts = KINDS[design.kind]
+    tuning = design.tuning / w if parts.spring else 0.0
+    if parts.walls:
+        damper = Damper(design.kind, mass=design.mu, gap=design.gap, e=design.e, tuning=tuning,
+                        damping=design.damping, units=design.units)
     else:
-        damper = Damper(design.kind, mass=design.mu, gap=design.gap, e=design.e,
-                        tuning=design.tuning / w if design.kind == "pid" else 0.0, damping=design.damping,
-                        units=design.units)
+        damper = Damper(design.kind, mass=design.mu, tuning=tuning, damping=design.damping)
     period = 2.0 * math.pi / w
     return Scene(building, (damper,), Harmonic(conditions.scale * design.force_ratio, r * w, 0.0),
                  duration=protocol.periods * period, window=protocol.average_from * period,
-                 start=design.start if design.kind != "tmd" else "centre",
+                 start=design.start if parts.walls else "centre",
                  unit_starts=None if unit_starts is None else tuple(unit_starts))
 
 
@@ -52,11 +54,11 @@ def paper_system(design: Design, conditions: Conditions = Conditions()) -> Syste
     In the drifted structure's own time (t' = (1 + delta) t) and the same lengths, the motion is the design's
     with the force F s / (1 + delta)^2, the same clearance d and the pendulum's frequency r' / (1 + delta).
     """
-    if design.kind == "tmd" or design.damping != 0.0:
-        raise ValueError("the paper's system has no TMD and no pendulum damping")
+    if not KINDS[design.kind].paper or design.damping != 0.0:
+        raise ValueError("the paper's system is an undamped CID or PID: no TMD and no pendulum damping")
     w = conditions.frequency
     return System(design.kind, mu=design.mu, beta=design.beta, e=design.e, gap=design.gap,
-                  rp=design.tuning / w if design.kind == "pid" else 0.0,
+                  rp=design.tuning / w if KINDS[design.kind].spring else 0.0,
                   force_ratio=conditions.scale * design.force_ratio / (w * w))
 
 
@@ -110,8 +112,8 @@ def capped_tmd_damping(design: Design, r_grid, protocol: Protocol, stroke_cap: f
     Bisection on beta_t: a TMD's stroke falls as its damping rises.  ``at``: the design's own peak response,
     if already run.  Returns (beta_t, its peak response).
     """
-    if design.kind != "tmd":
-        raise ValueError("only a TMD's stroke is capped by raising its damping")
+    if KINDS[design.kind].walls:
+        raise ValueError("only a damper without walls (a TMD) has its stroke capped by raising its damping")
     lo, hi = design.damping, beta_t_max
     at = at or peak_response(design, r_grid, protocol)
     if at["stroke_max"] <= stroke_cap:
@@ -158,14 +160,14 @@ def design_dataset(design: Design, grids: dict, r_grid, protocol: Protocol, stro
         data["X_m_capped"] = ((), capped["X_m"], {"long_name": "X_m of the TMD with its stroke capped",
                                                   "units": "1"})
     ds = xr.Dataset(data, coords=coords)
-    if design.kind != "tmd" and grids.get("units"):
+    if KINDS[design.kind].walls and grids.get("units"):
         add_multi_unit(ds, design, grids["units"], r_grid, protocol, grids["members"], grids["seed"],
                        single=on_scene)
     ds.attrs.update({"title": f"Table 1 in numbers: design {design.kind}", "kind": design.kind,
                      "design": str(design.__dict__),
                      "a_max": a_max(design.beta, design.force_ratio), "periods": protocol.periods,
                      "average_from": protocol.average_from, "initial_condition": f"structure at rest, damper mass "
-                     f"{'centred' if design.kind == 'tmd' else 'at start ' + design.start}",
+                     f"{'at start ' + design.start if KINDS[design.kind].walls else 'centred'}",
                      "length_unit": "the paper's model unit (F0/K = force_ratio at the design force)"})
     return ds
 
@@ -178,8 +180,8 @@ def multi_unit(design: Design, units, r_grid, protocol: Protocol, members: int, 
     'staggered': the units spread evenly from wall to wall; 'ensemble': ``members`` seeded random starts.
     ``single``: the one unit's scene response at the design's start, if already run (both n = 1 rows).
     """
-    if design.kind == "tmd":
-        raise ValueError("the multi-unit rows are the impact dampers'")
+    if not KINDS[design.kind].walls:
+        raise ValueError("the multi-unit rows are the impact dampers' (the kinds with walls)")
     out = {"symmetric": [], "staggered": [], "ensemble": []}
     for n in units:
         split = replace(design, units=int(n))

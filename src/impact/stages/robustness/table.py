@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pandas as pd
 
+from impact.model.kinds import CID, KINDS, PID, TMD
 from impact.stages.robustness.designs import (
     BAND,
     SAME_LEVEL,
@@ -39,6 +40,8 @@ def max_change(ds, name: str) -> float:
 
 
 # Table 1 of the paper: its row, characteristic and words for the CID, PID and TMD ("not rated": its "~ . ~")
+#: the kinds of the paper's Table 1, in the order of its columns (each row's words below)
+TABLE1_COLUMNS = (CID, PID, TMD)
 TABLE1 = [
     (2, "effectiveness for steady-state motion", ("moderate", "moderate", "high")),
     (5, "space requirement", ("moderate", "moderate", "high")),
@@ -80,7 +83,7 @@ def table1_measured(designs: dict) -> pd.DataFrame:
     damper's number as the words order (low < moderate < high; a larger number is more of the
     characteristic; effectiveness is 1/X_m), for every design of a damper with a different word.
     """
-    column = {"cid": 0, "pid": 1, "tmd": 2}
+    column = {kind: i for i, kind in enumerate(TABLE1_COLUMNS)}
     rows = []
     for row, characteristic, words in TABLE1:
         what, number = _NUMBERS[row]
@@ -139,16 +142,16 @@ def _band(ds, row: int) -> tuple[float, float]:
 
 def _note(ds, row: int) -> str:
     kind = ds.attrs["kind"]
-    if row == 7 and kind == "cid":
+    if row == 7 and not KINDS[kind].dashpot:
         return (f"a CID has no damper damping; its dissipation is set by e instead, and X_m changes by up to "
                 f"{max_change(ds, 'e'):.0%} over e = 0 to 1 (row 10)")
     if row == 5 and "X_m_capped" in ds:
         return (f"stroke capped to the CID's half gap {float(ds['stroke_cap']):.3g}: beta_t "
                 f"{float(ds['damping_capped']):.3g}, X_m {float(ds['X_m_capped']):.3f} (uncapped "
                 f"{float(ds['X_m_design']):.3f})")
-    if row == 5 and kind != "tmd":
+    if row == 5 and KINDS[kind].walls:
         return "bounded by half the gap: the mass travels between the walls"
-    if row == 10 and kind == "tmd":
+    if row == 10 and not KINDS[kind].walls:
         return "a TMD has no impacts: nothing in it depends on e"
     return ""
 

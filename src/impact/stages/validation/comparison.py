@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from impact.model.kinds import PID
 from impact.outputs.measurements import Measurement
 from impact.outputs.signals import (
     UnresolvedPeakError,
@@ -520,7 +521,7 @@ def fig5_data(cfg: dict | None = None, *, keep_records: bool = False) -> dict:
     bare_mean = {who: float(np.nanmean([p["mean"] for p in bare["points"][who]])) for who in ("model", "rig")}
     rows = []
     for who in ("model", "rig"):
-        for system, dd in (("pid", pid), ("bare", bare)):
+        for system, dd in ((PID, pid), ("bare", bare)):
             for p in dd["points"][who]:
                 for a, d in zip(p["amplitude"], p["delta"]):
                     rows.append({"source": who, "system": system, "x0_mm": p["x0_mm"], "amplitude_mm": float(a),

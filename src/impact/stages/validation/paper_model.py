@@ -24,6 +24,7 @@ from impact.engine.jitcache import compile_lock
 from impact.engine.paper import ensure_compiled, initial_state, pid_data
 from impact.engine.paper import param_vector as model_param_vector
 from impact.engine.sampler import paper_free_flight, paper_state
+from impact.model.kinds import PID
 from impact.model.params import Protocol, System
 from impact.outputs.measurements import Measurement, make_measurement
 from impact.rig import simulator as R
@@ -41,7 +42,7 @@ MODEL_SOURCE = ("model: Eq. (4) of the paper (linear pendulum, instantaneous imp
 
 def model_system(cfg: dict, case: Case) -> System:
     """Eq. (4) in model units (M = 1, omega = 1, lengths in mm) for a case."""
-    return System(kind="pid", mu=case.mu, beta=float(cfg["structure"]["beta"]), e=wall_e(cfg, case.wall),
+    return System(kind=PID, mu=case.mu, beta=float(cfg["structure"]["beta"]), e=wall_e(cfg, case.wall),
                   gap=case.gap_mm, rp=case.rp, force_ratio=float(cfg["excitation"]["force_ratio_mm"]),
                   phase=float(cfg["excitation"].get("phase", 0.0)),
                   frequency_hz=float(cfg["structure"]["frequency_hz"]), unit_m=1e-3)
@@ -230,7 +231,7 @@ def _sample_model(cfg: dict, case: Case, r: float, ts_s: np.ndarray, *, forced: 
 def _model_header(cfg: dict, case: Case | None, kind: str, notes: str) -> dict:
     fs = float(cfg["sensor"]["sample_rate_hz"])
     hdr: dict[str, Any] = {"format_version": 1, "kind": kind, "synthetic": True, "sample_rate_hz": fs,
-                           "units": "mm", "damper": "none" if case is None else "pid",
+                           "units": "mm", "damper": "none" if case is None else PID,
                            "structure_hz": float(cfg["structure"]["frequency_hz"]), "noise_rms": 0.0,
                            "source": MODEL_SOURCE}
     if case is not None:
@@ -328,7 +329,7 @@ def warm_up_model():
     if _WARM:
         return
 
-    ensure_compiled("pid")
+    ensure_compiled(PID)
     with compile_lock("experiment-model", "the virtual rig's model sampler", fresh=(_model_samples,)):
         cfg = validation_config(None)
         _sample_model(cfg, Case(0.0129, 30.0, 1.0, "steel"), 1.0, np.array([0.0, 0.01]), forced=True)

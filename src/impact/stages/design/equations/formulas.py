@@ -26,16 +26,25 @@ import xarray as xr
 from scipy.optimize import least_squares
 
 from impact.closed_form.tmd import den_hartog, tmd_peak
+from impact.model.kinds import KINDS, TMD
 from impact.model.params import ParameterError
 from impact.stages.design import chart_config
 from impact.stages.sweeps import gap_grid, run_curve
 
-#: the fitted coefficients of each kind's form, in order; the tuning terms t and v only where r' varies
-COEFFICIENTS = {"cid": ("a", "p", "s", "b", "c"), "pid": ("a", "p", "s", "t", "b", "c", "v")}
-#: the input each formula takes, by kind (the ranges in the configuration bound each)
-INPUTS = {"cid": ("mu", "e", "beta"), "pid": ("mu", "e", "beta", "rp")}
 #: the study's fit as the package ships it for `impact design --equations` (results/design/equations.json, copied)
 STORED = "fit.json"
+
+
+def coefficients(kind: str) -> tuple[str, ...]:
+    """The fitted coefficients of an impact damper's form, in order; the tuning terms t and v only where r'
+    varies (a kind with a spring)."""
+    return ("a", "p", "s", "t", "b", "c", "v") if KINDS[kind].spring else ("a", "p", "s", "b", "c")
+
+
+def inputs(kind: str) -> tuple[str, ...]:
+    """The inputs an impact damper's formula takes (the ranges in the configuration bound each): r' for a kind
+    with a spring."""
+    return ("mu", "e", "beta") + ("rp",) * KINDS[kind].spring
 
 
 @dataclass(frozen=True)
@@ -108,7 +117,7 @@ def fit(kind: str, rows: list[dict]) -> dict:
     """The form's coefficients by least squares on log X_m and log g over the rows (not on the chart's edge).
 
     Raises ParameterError when the rows are fewer than the coefficients they must determine."""
-    names = COEFFICIENTS[kind]
+    names = coefficients(kind)
     rows = [r for r in rows if not r["on_edge"]]
     xm_names = [n for n in names if n in ("a", "p", "s", "t")]
     gap_names = [n for n in names if n in ("b", "c", "v")]
@@ -160,7 +169,7 @@ def _curve_config(cfg: dict, beta: float) -> dict:
 
 def _spec(kind: str, pt: Point) -> dict:
     spec = {"damper": kind, "mu": pt.mu, "e": pt.e}
-    return {**spec, "rp": pt.rp} if kind == "pid" else spec
+    return {**spec, "rp": pt.rp} if KINDS[kind].spring else spec
 
 
 def direct_xm(cfg: dict, kind: str, pt: Point, gap_ratios) -> np.ndarray:
@@ -224,7 +233,7 @@ def study_kind(cfg: dict, kind: str, chart: xr.Dataset, stored_entry: dict | Non
     checks += [check_point(cfg, kind, coefs, Point(**c)) | {"held_out": True} for c in eq["checks"].get(kind, [])]
     plateau = plateau_factors(coefs, train) if any(not r["on_edge"] for r in train) else None
     entry = {"kind": kind, "coefficients": coefs, "fitted": fitted,
-             "ranges": {name: list(eq["ranges"][name]) for name in INPUTS[kind]},
+             "ranges": {name: list(eq["ranges"][name]) for name in inputs(kind)},
              "chart_beta": float(chart.attrs["beta"]), **_verdict(checks, eq["acceptable_error"]),
              "plateau_tolerance": eq["plateau"], "plateau_factors": list(plateau) if plateau else None,
              "points": train}
@@ -267,7 +276,7 @@ def stored() -> dict:
 
 
 def _check_ranges(kind: str, entry: dict, pt: Point) -> None:
-    for name in INPUTS[kind]:
+    for name in inputs(kind):
         lo, hi = entry["ranges"][name]
         value = getattr(pt, name)
         if not (math.isfinite(value) and lo <= value <= hi):
@@ -292,7 +301,7 @@ def evaluate(kind: str, pt: Point, fits: dict | None = None) -> dict:
     xm = formula_xm(coefs, pt)
     g = formula_gap(coefs, xm, pt)
     lo, hi = entry["plateau_factors"] if entry["plateau_factors"] else (1.0, 1.0)
-    return {"damper": kind, "mu": pt.mu, "e": pt.e, "beta": pt.beta, **({"rp": pt.rp} if kind == "pid" else {}),
+    return {"damper": kind, "mu": pt.mu, "e": pt.e, "beta": pt.beta, **({"rp": pt.rp} if KINDS[kind].spring else {}),
             "gap_ratio": g, "X_m": xm, "error_bound": entry["error_bound"], "error_held_out_max": entry["error_max"],
             "error_held_out_p95": entry["error_p95"],
             "plateau": [lo * g, hi * g] if lo <= hi else None, "plateau_tolerance": entry["plateau_tolerance"]}
@@ -304,5 +313,5 @@ def tmd_equations(mu: float, beta: float) -> dict:
     which the TMD chart holds)."""
     dh = den_hartog(mu)
     peak = tmd_peak(mu, beta, dh["f"], dh["beta_t"], force_ratio=1.0)[1]
-    return {"damper": "tmd", "mu": mu, "beta": beta, "tuning": dh["f"], "damping": dh["beta_t"], "gap_ratio": None,
+    return {"damper": TMD, "mu": mu, "beta": beta, "tuning": dh["f"], "damping": dh["beta_t"], "gap_ratio": None,
             "X_m": peak * 2.0 * beta, "error_bound": 0.0, "plateau": None}
