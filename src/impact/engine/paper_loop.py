@@ -44,6 +44,7 @@ import numpy as np
 from numba import njit
 
 from impact.engine import layout as L
+from impact.engine.bundles import borrowed
 from impact.engine.contact import CONTACT_TOL, event_cap_reached, floor_decision, plastic_end, stays
 from impact.engine.events import first_exit
 from impact.engine.segment import bound_tab, deriv_at0, kappa_powers
@@ -358,8 +359,305 @@ encode_contact = njit(cache=True)(contact_code)
 
 
 # ----------------------------------------------------------------------------
-# the run
+# the run: a loop over segments, each read as its named steps
 # ----------------------------------------------------------------------------
+
+# the loop's contact state, one integer array that the steps read and the step that changes it writes: the mode
+# (layout.MODE_*), the wall side (+-1, 0), the slide's sign sigma (+-1, 0), and the escape flags of the next
+# segment's gap and slide searches (the boundary each starts on and leaves)
+C_MODE, C_SIDE, C_SIGMA, C_ESCAPE, C_ESCAPE_V = 0, 1, 2, 3, 4
+NCONTACT = 5
+
+
+@njit(cache=True, inline='always')
+def _leave_wall(c, side, fric):
+    """The mass leaves the wall on `side` (released, or not held after it stuck): free flight, its gap search
+    escaping that wall; with friction it slides away from the wall, its slide search escaping s' = 0."""
+    c[C_MODE] = L.MODE_FREE
+    c[C_ESCAPE] = side
+    if fric is not None:
+        c[C_SIGMA] = -side
+        c[C_ESCAPE_V] = -1
+
+
+@njit(cache=True, inline='always')
+def _start_slide(c, sigma):
+    """The floor stops holding the mass, which slides with sign sigma (its slide search escaping s' = 0)."""
+    c[C_MODE] = L.MODE_FREE
+    c[C_SIGMA] = sigma
+    c[C_ESCAPE_V] = -1
+
+
+@njit(cache=True, inline='always')
+def _build_motion(kap, cx, cy, poly, z, t, p, pid, fric, a_f, cq, pp, c):
+    """The segment's motion in coefficient form for the contact mode; True when the contact changes before the
+    segment starts (the floor lets the mass slide, or the wall no longer holds it): the loop then starts again."""
+    mode = c[C_MODE]
+    if mode == L.MODE_FREE:
+        build_free_flight(kap, cx, cy, poly, z, t, p, pid, fric, c[C_SIGMA])
+    elif mode == L.MODE_FLOOR:
+        _build_combined(kap, cx, cy, poly, z, t, p, z[2] - z[0])
+        if fric is not None:
+            slide = _floor_decision(kap, cx, a_f, cq, pp)
+            if slide != 0:
+                _start_slide(c, slide)
+                return True
+    else:
+        side = c[C_SIDE]
+        half = 0.5 * p[L.P_GAP]
+        _build_combined(kap, cx, cy, poly, z, t, p, side * half if mode == L.MODE_STUCK else 0.0)
+        if mode == L.MODE_STUCK and not _stays_stuck(kap, cx, p, side, a_f, cq, pp):
+            _leave_wall(c, side, fric)
+            return True
+    return False
+
+
+@njit(cache=True, inline='always')
+def _velocity_and_powers(kap, cx, cv, kpow, kap_powered):
+    """The velocity row x' and, for a new set of exponents (a new contact mode), their |kap|^n for the bounds."""
+    for k in range(NT):
+        cv[k] = cx[k] * kap[k]
+        if kap[k] != kap_powered[k]:
+            kappa_powers(kap, kpow)
+            kap_powered[:] = kap
+
+
+@njit(cache=True, inline='always')
+def _search_event(kap, kpow, cx, cy, cs, cq, poly, pp, p, fric, a_f, c, tau_max, ev, ev2, diag):
+    """The next event of the contact mode, certified (events.first_exit), into ev (time, side, grazing passes,
+    steps).  Returns its kind: 1 the mode's own (an impact, the wall letting go, the floor letting the mass
+    slide), 2 a slide coming to rest."""
+    mode = c[C_MODE]
+    d = p[L.P_GAP]
+    half = 0.5 * d
+    if mode == L.MODE_FREE:
+        for k in range(NT):
+            cs[k] = cy[k] - cx[k]
+        _halve(kap, cs)
+        delta = CONTACT_TOL * (bound_tab(kpow, cs, _NO_POLY, 0, 0.0) + d)
+        _poly4(pp, poly[0], poly[1])
+        first_exit(kap, kpow, cs, pp, -half, half, tau_max, c[C_ESCAPE], delta, ev)
+        if fric is not None:
+            return _search_slide_stop(kap, kpow, cs, cq, poly, pp, c, tau_max, ev, ev2, diag)
+    elif mode == L.MODE_STUCK:
+        side = c[C_SIDE]
+        for k in range(NT):
+            cq[k] = side * cx[k] * kap[k] * kap[k]
+        _halve(kap, cq)
+        level = -p[L.P_WP] ** 2 * half + a_f
+        delta = CONTACT_TOL * (bound_tab(kpow, cq, _NO_POLY, 0, 0.0) + abs(level))
+        # just stuck with the contact force at round-off from its limit: the
+        # force is known to move away from it (see _stays_stuck)
+        q0 = deriv_at0(kap, cq, _NO_POLY, 0)
+        esc = 1 if level - q0 < delta else 0
+        _poly4(pp, 0.0, 0.0)
+        first_exit(kap, kpow, cq, pp, -np.inf, level, tau_max, esc, delta, ev)
+    elif mode == L.MODE_FLOOR:
+        for k in range(NT):
+            cq[k] = cx[k] * kap[k] * kap[k]
+        _halve(kap, cq)
+        delta = CONTACT_TOL * (bound_tab(kpow, cq, _NO_POLY, 0, 0.0) + a_f)
+        q0 = deriv_at0(kap, cq, _NO_POLY, 0)
+        esc = 0
+        if a_f - abs(q0) < delta:
+            esc = 1 if q0 > 0.0 else -1
+        _poly4(pp, 0.0, 0.0)
+        first_exit(kap, kpow, cq, pp, -a_f, a_f, tau_max, esc, delta, ev)
+    else:
+        ev[0] = np.inf
+        ev[1] = 0.0
+        ev[2] = 0.0
+        ev[3] = 0.0
+    return 1
+
+
+@njit(cache=True, inline='always')
+def _search_slide_stop(kap, kpow, cs, cq, poly, pp, c, tau_max, ev, ev2, diag):
+    """A sliding mass's slide stopping (sigma s' > 0 while it slides, 0 where it stops) before the gap's event:
+    2 if it comes first (ev then holds it), else 1."""
+    sigma = c[C_SIGMA]
+    for k in range(NT):
+        cq[k] = sigma * cs[k] * kap[k]
+    cq[6] += sigma * poly[0]
+    dv = CONTACT_TOL * (bound_tab(kpow, cq, _NO_POLY, 0, 0.0) + 2.0 * abs(poly[1]))
+    _poly4(pp, 2.0 * sigma * poly[1], 0.0)
+    first_exit(kap, kpow, cq, pp, 0.0, np.inf, min(ev[0], tau_max), c[C_ESCAPE_V], dv, ev2)
+    diag[L.D_STEPS] += ev2[3]
+    if ev2[0] < ev[0]:
+        ev[0] = ev2[0]
+        ev[1] = 0.0
+        return 2
+    return 1
+
+
+@njit(cache=True, inline='always')
+def _advance(kap, eh, cx, cy, cv, cf, poly, z, p, fric, a_f, c, t, tau, ev, diag):
+    """Move the state to the segment's end, tau after t, and book its exact integrals: the force's work, the
+    viscous loss, x^2 over the window, the time in contact, the friction's work; the energy's high mark."""
+    diag[L.D_SEGMENTS] += 1.0
+    diag[L.D_GRAZE] += ev[2]
+    diag[L.D_STEPS] += ev[3]
+    theta0 = p[L.P_OMEGA] * t + p[L.P_PHI]
+    cf[4] = p[L.P_F0] * np.exp(1j * theta0) / 2j
+    cf[5] = cf[4].conjugate()
+    for k in range(NT):
+        if k > 0 and kap[k] == kap[k - 1].conjugate():
+            eh[k] = eh[k - 1].conjugate()  # exp(conj(z)) = conj(exp(z)): one exponential per pair
+        else:
+            eh[k] = np.exp(kap[k] * tau)
+    diag[L.D_WORK] += _int_prod0(kap, eh, cf, cv, tau)
+    diag[L.D_VISC] += 2.0 * p[L.P_BETA] * _int_prod0(kap, eh, cv, cv, tau)
+    t_win = p[L.P_TWIN]
+    if t + tau > t_win:
+        if t >= t_win:
+            diag[L.D_X2WIN] += _int_prod0(kap, eh, cx, cx, tau)
+        else:
+            diag[L.D_X2WIN] += _int_prod(kap, cx, cx, t_win - t, tau)
+    if c[C_MODE] != L.MODE_FREE:
+        diag[L.D_STUCKTIME] += tau
+    s_start = z[2] - z[0]
+    _state_from(kap, eh, cx, cy, poly[0], poly[1], tau, z)
+    e_now = _energy(z, p)
+    if e_now > diag[L.D_EMAX]:
+        diag[L.D_EMAX] = e_now
+    if fric is not None:
+        if c[C_MODE] == L.MODE_FREE:
+            # s' keeps its sign on a sliding segment: the work is exact
+            diag[L.D_FRICTION] += p[L.P_MU] * a_f * c[C_SIGMA] * (z[2] - z[0] - s_start)
+
+
+@njit(cache=True, inline='always')
+def _book_stop(diag, stop, ev_kind, mode, ev_side):
+    """Why and where the run stopped at the event cap or the stall guard (layout.D_STOP_*)."""
+    diag[L.D_CAP] = stop
+    diag[L.D_STOP_ELEMENT] = 0.0  # the one unit
+    diag[L.D_STOP_EVENT] = _event_kind(ev_kind, mode)
+    diag[L.D_STOP_SIDE] = ev_side
+
+
+@njit(cache=True, inline='always')
+def _resolve_event(kap, kpow, cx, cy, cs, cq, pp, poly, z, t, p, pid, fric, a_f, c, ev_kind, ev_side, diag,
+                   rec, irec):
+    """The contact's answer to the event at t: a slide comes to rest or starts, the wall lets go, or the mass
+    strikes wall ev_side (then the impact, whether the mass sticks and whether the wall holds it, and its
+    record).  Returns the number of impact records written."""
+    half = 0.5 * p[L.P_GAP]
+    mode = c[C_MODE]
+    if fric is not None:
+        if ev_kind == 2:
+            # the slide ends: the floor holds the mass or it slides back
+            z[3] = z[1]
+            c[C_MODE] = L.MODE_FLOOR
+            return irec
+        if mode == L.MODE_FLOOR:
+            # the floor can no longer drag the mass along: it slides
+            z[3] = z[1]
+            _start_slide(c, -ev_side)
+            return irec
+    if mode == L.MODE_STUCK:
+        # release: the wall stops holding the mass, which leaves with s' = 0
+        side = c[C_SIDE]
+        z[2] = z[0] + side * half
+        z[3] = z[1]
+        _leave_wall(c, side, fric)
+        return irec
+    s_now = z[2] - z[0]
+    pen = abs(s_now) - half
+    if pen > diag[L.D_PEN]:
+        diag[L.D_PEN] = pen
+    approach = ev_side * (z[3] - z[1])
+    vm = z[1]
+    wm = z[3]
+    if approach <= 0.0:
+        # touched within contact tolerance while already separating
+        z[2] = z[0] + ev_side * half
+        c[C_ESCAPE] = ev_side
+        return irec
+    diag[L.D_IMPACTS] += 1.0
+    if t >= p[L.P_TWIN]:
+        diag[L.D_IMPACTS_WIN] += 1.0
+    _strike(kap, kpow, cx, cy, cs, cq, pp, poly, z, t, p, pid, fric, a_f, c, ev_side, diag)
+    if irec < rec.shape[0]:
+        _record_impact(rec[irec], t, c, z, vm, wm, approach, p)
+        irec += 1
+    return irec
+
+
+@njit(cache=True, inline='always')
+def _strike(kap, kpow, cx, cy, cs, cq, pp, poly, z, t, p, pid, fric, a_f, c, side, diag):
+    """The impact on wall `side` (Newton's law), then the mass's contact: it rebounds, or it sticks (a rebound
+    too slow to clear the contact tolerance is a plastic end) and the wall holds it or lets it go."""
+    stuck = _apply_impact(z, side, p, diag)
+    c[C_SIDE] = side
+    if fric is not None:
+        c[C_SIGMA] = -side
+    if not stuck:
+        # a rebound whose excursion v^2 / (2 a) cannot clear the contact
+        # tolerance is unresolvable: the mass stays at the wall
+        build_free_flight(kap, cx, cy, poly, z, t, p, pid, fric, c[C_SIGMA])
+        for k in range(NT):
+            cs[k] = cy[k] - cx[k]
+        push = side * (deriv_at0(kap, cs, _NO_POLY, 2) + 2.0 * poly[1])
+        rebound = z[3] - z[1]
+        tol = CONTACT_TOL * (bound_tab(kpow, cs, _NO_POLY, 0, 0.0) + p[L.P_GAP])
+        if push > 0.0 and rebound * rebound < 2.0 * tol * push:
+            _stick(z, p, diag)
+            stuck = True
+    if stuck:
+        # decide whether the wall holds the mass
+        _build_combined(kap, cx, cy, poly, z, t, p, side * (0.5 * p[L.P_GAP]))
+        if _stays_stuck(kap, cx, p, side, a_f, cq, pp):
+            c[C_MODE] = L.MODE_STUCK
+            diag[L.D_STICKS] += 1.0
+        else:
+            _leave_wall(c, side, fric)
+    else:
+        c[C_MODE] = L.MODE_FREE
+        c[C_ESCAPE] = side
+
+
+@njit(cache=True, inline='always')
+def _record_impact(row, t, c, z, vm, wm, approach, p):
+    """One impact's record (layout.R_*): its time, wall, the velocities before and after, whether the mass stuck,
+    and Newton's impulse alone, as solve_impulses gives it in the scene loop (a plastic end is not in it)."""
+    row[L.R_T] = t
+    row[L.R_UNIT] = 0.0
+    row[L.R_SIDE] = c[C_SIDE]
+    row[L.R_X] = z[0]
+    row[L.R_V0] = vm
+    row[L.R_W0] = wm
+    row[L.R_V1] = z[1]
+    row[L.R_W1] = z[3]
+    row[L.R_STUCK] = 1.0 if c[C_MODE] == L.MODE_STUCK else 0.0
+    row[L.R_IMPULSE] = p[L.P_MU] * (1.0 + p[L.P_E]) * approach / (1.0 + p[L.P_MU])
+
+
+@njit(cache=True, inline='always')
+def _initial_contact(c, code_init, z, p, fric):
+    """The contact state a run starts in, into c, from its code (encode_contact) and state: no gap locks the
+    mass; a state just after an impact (a closed-form orbit) escapes its wall; with friction, a mass moving with
+    the floor rests on it, and one that moves relative to it slides."""
+    c[C_SIGMA] = code_init // 100 - 1
+    c[C_SIDE] = (code_init % 100) // 10 - 1
+    c[C_MODE] = code_init % 10
+    d = p[L.P_GAP]
+    if d == 0.0:
+        c[C_MODE] = L.MODE_LOCKED
+    side = c[C_SIDE]
+    if c[C_MODE] == L.MODE_FREE and side != 0 and abs(z[2] - z[0]) >= 0.5 * d * (1.0 - CONTACT_TOL) and d > 0.0:
+        c[C_ESCAPE] = side
+    if fric is not None:
+        if c[C_MODE] == L.MODE_FREE and z[3] == z[1]:
+            c[C_MODE] = L.MODE_FLOOR
+        elif c[C_MODE] == L.MODE_FREE and c[C_SIGMA] == 0:
+            c[C_SIGMA] = 1 if z[3] > z[1] else -1
+
+
+# the run's workspace: complex rows over the coefficient slots, and its real vectors, sliced into views
+W_KAP, W_CX, W_CY, W_CS, W_CV, W_CQ, W_CF, W_EH, W_POWERED = range(9)
+NROWS = 9
+V_POLY, V_PP, V_EV, V_EV2, NVEC = 0, 2, 6, 10, 14
+
 
 @njit(cache=True)
 def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
@@ -371,259 +669,61 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
     (n may be 0).  diag: layout.NDIAG diagnostics (zeroed here).  z_out: final state.
     Returns the final contact code, for continuation runs.
     """
+    rows = np.zeros((NROWS, NT), dtype=np.complex128)
+    rows[W_POWERED, :] = np.nan
+    kpow = np.zeros((5, NT))
+    vec = np.zeros(NVEC)
+    clock = np.zeros(4)
+    c = np.zeros(NCONTACT, dtype=np.int64)
+    return _loop(p, z_init, code_init, pid, fric, rec, diag, z_out, rows, kpow, vec, clock, c)
+
+
+@njit(cache=True)
+def _loop(p, z_init, code_init, pid, fric, rec, diag, z_out, rows, kpow, vec, clock, c):
+    """run's loop over segments, in the workspace run allocated (rows, kpow, vec, clock, c) and holds while this
+    runs.  Every array is taken borrowed (bundles.borrowed: no reference of its own), so passing it to a step
+    costs no reference count: the counts were a quarter of a run when the loop was written as these steps."""
+    rows, kpow, vec, clock, c = borrowed(rows), borrowed(kpow), borrowed(vec), borrowed(clock), borrowed(c)
+    p, rec, diag, z = borrowed(p), borrowed(rec), borrowed(diag), borrowed(z_out)
+    kap, cx, cy, cs = rows[W_KAP], rows[W_CX], rows[W_CY], rows[W_CS]
+    cv, cq, cf, eh, kap_powered = rows[W_CV], rows[W_CQ], rows[W_CF], rows[W_EH], rows[W_POWERED]
+    poly, pp = vec[V_POLY:V_PP], vec[V_PP:V_EV]  # pp: (0, p1, p2, 0), the polynomial part as the search takes it
+    ev, ev2 = vec[V_EV:V_EV2], vec[V_EV2:NVEC]
     for i in range(L.NDIAG):
         diag[i] = 0.0
-    kap = np.zeros(NT, dtype=np.complex128)
-    cx = np.zeros(NT, dtype=np.complex128)
-    cy = np.zeros(NT, dtype=np.complex128)
-    cs = np.zeros(NT, dtype=np.complex128)
-    cv = np.zeros(NT, dtype=np.complex128)
-    cq = np.zeros(NT, dtype=np.complex128)
-    cf = np.zeros(NT, dtype=np.complex128)
-    eh = np.zeros(NT, dtype=np.complex128)  # exp(kap tau) of the segment
-    kpow = np.zeros((5, NT))
-    kap_powered = np.full(NT, np.nan + 0j)
-    poly = np.zeros(2)
-    pp = np.zeros(4)  # (0, p1, p2, 0): the polynomial part as the shared search takes it
-    ev = np.zeros(4)
-    ev2 = np.zeros(4)
-    z = z_init.copy()
-    d = p[L.P_GAP]
-    half = 0.5 * d
+    for i in range(4):
+        z[i] = z_init[i]
     t = p[L.P_T0]
     t_end = p[L.P_TEND]
-    t_win = p[L.P_TWIN]
-    period = p[L.P_PERIOD]
     a_f = 0.0
     if fric is not None:
         a_f = fric[0]
-    sigma = code_init // 100 - 1
-    side = (code_init % 100) // 10 - 1
-    mode = code_init % 10
-    if d == 0.0:
-        mode = L.MODE_LOCKED
-    escape = 0
-    escape_v = 0
-    if mode == L.MODE_FREE and side != 0 and abs(z[2] - z[0]) >= half * (1.0 - CONTACT_TOL) and d > 0.0:
-        # a state just after an impact on wall `side` (e.g. a closed-form orbit)
-        escape = side
-    if fric is not None:
-        if mode == L.MODE_FREE and z[3] == z[1]:
-            mode = L.MODE_FLOOR
-        elif mode == L.MODE_FREE and sigma == 0:
-            sigma = 1 if z[3] > z[1] else -1
+    _initial_contact(c, code_init, z, p, fric)
     diag[L.D_E0] = _energy(z, p)
     diag[L.D_EMAX] = diag[L.D_E0]
-    clock = np.array([math.floor(t / period), 0.0, t, 0.0])  # contact.event_cap_reached's
-    nrec = rec.shape[0]
+    clock[0] = math.floor(t / p[L.P_PERIOD])  # contact.event_cap_reached's
+    clock[2] = t
     irec = 0
     while t < t_end:
         tau_max = t_end - t
-        if mode == L.MODE_FREE:
-            build_free_flight(kap, cx, cy, poly, z, t, p, pid, fric, sigma)
-        elif mode == L.MODE_FLOOR:
-            _build_combined(kap, cx, cy, poly, z, t, p, z[2] - z[0])
-            if fric is not None:
-                slide = _floor_decision(kap, cx, a_f, cq, pp)
-                if slide != 0:
-                    mode = L.MODE_FREE
-                    sigma = slide
-                    escape_v = -1
-                    continue
-        else:
-            _build_combined(kap, cx, cy, poly, z, t, p, side * half if mode == L.MODE_STUCK else 0.0)
-            if mode == L.MODE_STUCK and not _stays_stuck(kap, cx, p, side, a_f, cq, pp):
-                mode = L.MODE_FREE
-                escape = side
-                if fric is not None:
-                    sigma = -side
-                    escape_v = -1
-                continue
-        for k in range(NT):
-            cv[k] = cx[k] * kap[k]
-            if kap[k] != kap_powered[k]:  # a new contact mode: its |kap|^n for the search's bounds
-                kappa_powers(kap, kpow)
-                kap_powered[:] = kap
-        # locate the next event: ev_kind 1 impact/release/floor exit, 2 sliding stops
-        ev_kind = 1
-        if mode == L.MODE_FREE:
-            for k in range(NT):
-                cs[k] = cy[k] - cx[k]
-            _halve(kap, cs)
-            delta = CONTACT_TOL * (bound_tab(kpow, cs, _NO_POLY, 0, 0.0) + d)
-            _poly4(pp, poly[0], poly[1])
-            first_exit(kap, kpow, cs, pp, -half, half, tau_max, escape, delta, ev)
-            if fric is not None:
-                # sigma * s' > 0 while sliding; the slide ends where it reaches 0
-                for k in range(NT):
-                    cq[k] = sigma * cs[k] * kap[k]
-                cq[6] += sigma * poly[0]
-                dv = CONTACT_TOL * (bound_tab(kpow, cq, _NO_POLY, 0, 0.0) + 2.0 * abs(poly[1]))
-                _poly4(pp, 2.0 * sigma * poly[1], 0.0)
-                first_exit(kap, kpow, cq, pp, 0.0, np.inf, min(ev[0], tau_max), escape_v, dv, ev2)
-                diag[L.D_STEPS] += ev2[3]
-                if ev2[0] < ev[0]:
-                    ev[0] = ev2[0]
-                    ev[1] = 0.0
-                    ev_kind = 2
-        elif mode == L.MODE_STUCK:
-            for k in range(NT):
-                cq[k] = side * cx[k] * kap[k] * kap[k]
-            _halve(kap, cq)
-            level = -p[L.P_WP] ** 2 * half + a_f
-            delta = CONTACT_TOL * (bound_tab(kpow, cq, _NO_POLY, 0, 0.0) + abs(level))
-            # just stuck with the contact force at round-off from its limit: the
-            # force is known to move away from it (see _stays_stuck)
-            q0 = deriv_at0(kap, cq, _NO_POLY, 0)
-            esc = 1 if level - q0 < delta else 0
-            _poly4(pp, 0.0, 0.0)
-            first_exit(kap, kpow, cq, pp, -np.inf, level, tau_max, esc, delta, ev)
-        elif mode == L.MODE_FLOOR:
-            for k in range(NT):
-                cq[k] = cx[k] * kap[k] * kap[k]
-            _halve(kap, cq)
-            delta = CONTACT_TOL * (bound_tab(kpow, cq, _NO_POLY, 0, 0.0) + a_f)
-            q0 = deriv_at0(kap, cq, _NO_POLY, 0)
-            esc = 0
-            if a_f - abs(q0) < delta:
-                esc = 1 if q0 > 0.0 else -1
-            _poly4(pp, 0.0, 0.0)
-            first_exit(kap, kpow, cq, pp, -a_f, a_f, tau_max, esc, delta, ev)
-        else:
-            ev[0] = np.inf
-            ev[1] = 0.0
-            ev[2] = 0.0
-            ev[3] = 0.0
+        if _build_motion(kap, cx, cy, poly, z, t, p, pid, fric, a_f, cq, pp, c):
+            continue
+        _velocity_and_powers(kap, cx, cv, kpow, kap_powered)
+        ev_kind = _search_event(kap, kpow, cx, cy, cs, cq, poly, pp, p, fric, a_f, c, tau_max, ev, ev2, diag)
         tau = min(ev[0], tau_max)
-        diag[L.D_SEGMENTS] += 1.0
-        diag[L.D_GRAZE] += ev[2]
-        diag[L.D_STEPS] += ev[3]
-        # exact integrals over the segment
-        theta0 = p[L.P_OMEGA] * t + p[L.P_PHI]
-        cf[4] = p[L.P_F0] * np.exp(1j * theta0) / 2j
-        cf[5] = cf[4].conjugate()
-        for k in range(NT):
-            if k > 0 and kap[k] == kap[k - 1].conjugate():
-                eh[k] = eh[k - 1].conjugate()  # exp(conj(z)) = conj(exp(z)): one exponential per pair
-            else:
-                eh[k] = np.exp(kap[k] * tau)
-        diag[L.D_WORK] += _int_prod0(kap, eh, cf, cv, tau)
-        diag[L.D_VISC] += 2.0 * p[L.P_BETA] * _int_prod0(kap, eh, cv, cv, tau)
-        if t + tau > t_win:
-            if t >= t_win:
-                diag[L.D_X2WIN] += _int_prod0(kap, eh, cx, cx, tau)
-            else:
-                diag[L.D_X2WIN] += _int_prod(kap, cx, cx, t_win - t, tau)
-        if mode != L.MODE_FREE:
-            diag[L.D_STUCKTIME] += tau
-        s_start = z[2] - z[0]
-        _state_from(kap, eh, cx, cy, poly[0], poly[1], tau, z)
-        e_now = _energy(z, p)
-        if e_now > diag[L.D_EMAX]:
-            diag[L.D_EMAX] = e_now
-        if fric is not None:
-            if mode == L.MODE_FREE:
-                # s' keeps its sign on a sliding segment: the work is exact
-                diag[L.D_FRICTION] += p[L.P_MU] * a_f * sigma * (z[2] - z[0] - s_start)
+        _advance(kap, eh, cx, cy, cv, cf, poly, z, p, fric, a_f, c, t, tau, ev, diag)
         t = t + tau
-        escape = 0
-        escape_v = 0
+        c[C_ESCAPE] = 0
+        c[C_ESCAPE_V] = 0
         if ev[0] > tau_max:
             break
         stop = event_cap_reached(t, p, clock)  # the cap on events per period, and the stall guard
         if stop != 0:
-            diag[L.D_CAP] = stop
-            diag[L.D_STOP_ELEMENT] = 0.0  # the one unit
-            diag[L.D_STOP_EVENT] = _event_kind(ev_kind, mode)
-            diag[L.D_STOP_SIDE] = ev[1]
+            _book_stop(diag, stop, ev_kind, c[C_MODE], ev[1])
             break
-        ev_side = int(ev[1])
-        if fric is not None:
-            if ev_kind == 2:
-                # the slide ends: the floor holds the mass or it slides back
-                z[3] = z[1]
-                mode = L.MODE_FLOOR
-                continue
-            if mode == L.MODE_FLOOR:
-                # the floor can no longer drag the mass along: it slides
-                z[3] = z[1]
-                mode = L.MODE_FREE
-                sigma = -ev_side
-                escape_v = -1
-                continue
-        if mode == L.MODE_STUCK:
-            # release: the wall stops holding the mass, which leaves with s' = 0
-            mode = L.MODE_FREE
-            z[2] = z[0] + side * half
-            z[3] = z[1]
-            escape = side
-            if fric is not None:
-                sigma = -side
-                escape_v = -1
-            continue
-        # impact on wall ev_side
-        s_now = z[2] - z[0]
-        pen = abs(s_now) - half
-        if pen > diag[L.D_PEN]:
-            diag[L.D_PEN] = pen
-        approach = ev_side * (z[3] - z[1])
-        vm = z[1]
-        wm = z[3]
-        if approach <= 0.0:
-            # touched within contact tolerance while already separating
-            z[2] = z[0] + ev_side * half
-            escape = ev_side
-            continue
-        diag[L.D_IMPACTS] += 1.0
-        if t >= t_win:
-            diag[L.D_IMPACTS_WIN] += 1.0
-        stuck = _apply_impact(z, ev_side, p, diag)
-        side = ev_side
-        if fric is not None:
-            sigma = -side
-        if not stuck:
-            # a rebound whose excursion v^2 / (2 a) cannot clear the contact
-            # tolerance is unresolvable: the mass stays at the wall
-            build_free_flight(kap, cx, cy, poly, z, t, p, pid, fric, sigma)
-            for k in range(NT):
-                cs[k] = cy[k] - cx[k]
-            push = side * (deriv_at0(kap, cs, _NO_POLY, 2) + 2.0 * poly[1])
-            rebound = z[3] - z[1]
-            tol = CONTACT_TOL * (bound_tab(kpow, cs, _NO_POLY, 0, 0.0) + d)
-            if push > 0.0 and rebound * rebound < 2.0 * tol * push:
-                _stick(z, p, diag)
-                stuck = True
-        if stuck:
-            # decide whether the wall holds the mass
-            _build_combined(kap, cx, cy, poly, z, t, p, side * half)
-            if _stays_stuck(kap, cx, p, side, a_f, cq, pp):
-                mode = L.MODE_STUCK
-                diag[L.D_STICKS] += 1.0
-            else:
-                mode = L.MODE_FREE
-                escape = side
-                if fric is not None:
-                    escape_v = -1
-        else:
-            mode = L.MODE_FREE
-            escape = side
-        if irec < nrec:
-            rec[irec, L.R_T] = t
-            rec[irec, L.R_UNIT] = 0.0
-            rec[irec, L.R_SIDE] = side
-            rec[irec, L.R_X] = z[0]
-            rec[irec, L.R_V0] = vm
-            rec[irec, L.R_W0] = wm
-            rec[irec, L.R_V1] = z[1]
-            rec[irec, L.R_W1] = z[3]
-            rec[irec, L.R_STUCK] = 1.0 if mode == L.MODE_STUCK else 0.0
-            # Newton's impulse alone, as solve_impulses gives it in the scene loop: a plastic end is not in it
-            rec[irec, L.R_IMPULSE] = p[L.P_MU] * (1.0 + p[L.P_E]) * approach / (1.0 + p[L.P_MU])
-            irec += 1
+        irec = _resolve_event(kap, kpow, cx, cy, cs, cq, pp, poly, z, t, p, pid, fric, a_f, c, ev_kind,
+                              int(ev[1]), diag, rec, irec)
     diag[L.D_E1] = _energy(z, p)
     diag[L.D_NREC] = irec
     diag[L.D_TEND] = t
-    for i in range(4):
-        z_out[i] = z[i]
-    return encode_contact(mode, side, sigma)
-
+    return encode_contact(c[C_MODE], c[C_SIDE], c[C_SIGMA])
