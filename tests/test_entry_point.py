@@ -87,8 +87,9 @@ def test_unknown_measures_and_stray_options_are_refused_by_name():
 
 def test_a_run_certifies_the_peaks_it_is_asked_for_to_the_bit_and_no_others():
     """A run asked for the drifts or the strokes alone certifies those peaks exactly as a run asked for every peak
-    (each monitor is searched on its own; the roof's row still gives the window its square), reads NaN for the
-    others, and moves, impacts and balances its energy to the bit as the full run does."""
+    (each monitor is searched on its own; the roof's row still gives the window its square when the amplitude is
+    asked, and no window is integrated when neither it nor every peak is), reads NaN for the others, and moves,
+    impacts and balances its energy to the bit as the full run does."""
     building = Building.uniform(3, 1.0, 0.02)
     t = np.arange(0.0, 6.0, 0.01)
     quake = GroundMotion(3.0 * np.sin(2.0 * np.pi * t) * np.exp(-0.3 * t), 0.01)
@@ -105,6 +106,12 @@ def test_a_run_certifies_the_peaks_it_is_asked_for_to_the_bit_and_no_others():
             (full.impacts, full.amplitude, full.diagnostics["energy_residual"])
         assert math.isnan(part.peak_roof_displacement) and math.isnan(part.peak_roof_acceleration)
     assert np.all(np.isnan(drifts.peak_strokes)) and np.all(np.isnan(strokes.peak_drifts))
+    # the collapse stage's run: no amplitude, so no window; the same drifts, motion, impacts and energy
+    bare = engine.simulate(scene, measures=("impacts", "drifts"))
+    np.testing.assert_array_equal(bare.peak_drifts, full.peak_drifts)
+    np.testing.assert_array_equal(bare.final_q, full.final_q)
+    assert (bare.impacts, bare.diagnostics["energy_residual"]) == (full.impacts, full.diagnostics["energy_residual"])
+    assert math.isnan(bare.amplitude) and math.isnan(bare.rms_roof_displacement) and full.amplitude > 0.0
     assert math.isnan(engine.simulate(scene).peak_interstorey_drift)  # the default asks for no peak
     with pytest.raises(ParameterError, match="peaks: 'storeys' unknown; allowed roof, drifts, strokes"):
         simulate_scene(scene, peaks=("storeys",))

@@ -47,6 +47,13 @@ YieldArrays = namedtuple("YieldArrays", "stiffness hardening yield_drift geometr
 #: the record's coefficient (an absolute acceleration) and a cap the peak cannot pass
 MonitorArrays = namedtuple("MonitorArrays", "rows kind record_coef cap")
 
+#: the paper loop's workspace (paper_loop._loop, every array borrowed): its complex rows over the seven slots (the
+#: exponents kap, x's and y's coefficients cx cy, the gap row cs, the velocity row cv, a contact row cq, the force
+#: row cf, exp(kap tau) eh, |kap|^n kpow and the exponents it was made for), the polynomial parts (poly; pp as the
+#: search takes it), the searches' outputs (ev, ev2), the contact state c (paper_loop.C_*), the run's parameters
+#: p, its state z, diagnostics and impact records
+PaperWork = namedtuple("PaperWork", "kap cx cy cs cv cq cf eh kpow kap_powered poly pp ev ev2 c p z diag rec")
+
 #: the scene's arrays that every run has: parameters (layout.P_*), building, units, load vector, monitors
 SceneArrays = namedtuple("SceneArrays", "p building units load_vec monitors")
 

@@ -22,7 +22,8 @@ BRANCH_ELASTIC = 0
 P_T0, P_TEND, P_TWIN, P_VSTICK, P_MAXEV, P_PERIOD = 0, 1, 2, 3, 4, 5
 P_OMEGA, P_PHI, P_F0 = 6, 7, 8          # harmonic load F0 sin(Omega t + phi)
 P_REC_T0, P_REC_DT = 9, 10              # record load: first sample time and step
-NPAR = 11
+P_WINDOW = 11  # the scene loop: 1.0 integrates the roof's square over the window (amplitude, RMS), 0.0 not (unread)
+NPAR = 12
 # the paper loop's system, model units (M = 1, omega_n = 1): mass ratio, damping ratio, restitution, gap,
 # the pendulum's tuning wp (0 for the CID)
 P_MU, P_BETA, P_E, P_GAP, P_WP = range(NPAR, NPAR + 5)

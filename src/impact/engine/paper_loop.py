@@ -44,7 +44,7 @@ import numpy as np
 from numba import njit
 
 from impact.engine import layout as L
-from impact.engine.bundles import borrowed
+from impact.engine.bundles import PaperWork, borrowed
 from impact.engine.contact import CONTACT_TOL, event_cap_reached, floor_decision, plastic_end, stays
 from impact.engine.events import first_exit
 from impact.engine.segment import bound_tab, deriv_at0, kappa_powers
@@ -389,9 +389,10 @@ def _start_slide(c, sigma):
 
 
 @njit(cache=True, inline='always')
-def _build_motion(kap, cx, cy, poly, z, t, p, pid, fric, a_f, cq, pp, c):
+def _build_motion(w, t, pid, fric, a_f):
     """The segment's motion in coefficient form for the contact mode; True when the contact changes before the
     segment starts (the floor lets the mass slide, or the wall no longer holds it): the loop then starts again."""
+    kap, cx, cy, poly, z, p, cq, pp, c = w.kap, w.cx, w.cy, w.poly, w.z, w.p, w.cq, w.pp, w.c
     mode = c[C_MODE]
     if mode == L.MODE_FREE:
         build_free_flight(kap, cx, cy, poly, z, t, p, pid, fric, c[C_SIGMA])
@@ -413,8 +414,9 @@ def _build_motion(kap, cx, cy, poly, z, t, p, pid, fric, a_f, cq, pp, c):
 
 
 @njit(cache=True, inline='always')
-def _velocity_and_powers(kap, cx, cv, kpow, kap_powered):
+def _velocity_and_powers(w):
     """The velocity row x' and, for a new set of exponents (a new contact mode), their |kap|^n for the bounds."""
+    kap, cx, cv, kpow, kap_powered = w.kap, w.cx, w.cv, w.kpow, w.kap_powered
     for k in range(NT):
         cv[k] = cx[k] * kap[k]
         if kap[k] != kap_powered[k]:
@@ -423,10 +425,11 @@ def _velocity_and_powers(kap, cx, cv, kpow, kap_powered):
 
 
 @njit(cache=True, inline='always')
-def _search_event(kap, kpow, cx, cy, cs, cq, poly, pp, p, fric, a_f, c, tau_max, ev, ev2, diag):
-    """The next event of the contact mode, certified (events.first_exit), into ev (time, side, grazing passes,
+def _search_event(w, fric, a_f, tau_max):
+    """The next event of the contact mode, certified (events.first_exit), into w.ev (time, side, grazing passes,
     steps).  Returns its kind: 1 the mode's own (an impact, the wall letting go, the floor letting the mass
     slide), 2 a slide coming to rest."""
+    kap, kpow, cx, cy, cs, cq, poly, pp, p, c, ev = w.kap, w.kpow, w.cx, w.cy, w.cs, w.cq, w.poly, w.pp, w.p, w.c, w.ev
     mode = c[C_MODE]
     d = p[L.P_GAP]
     half = 0.5 * d
@@ -438,7 +441,7 @@ def _search_event(kap, kpow, cx, cy, cs, cq, poly, pp, p, fric, a_f, c, tau_max,
         _poly4(pp, poly[0], poly[1])
         first_exit(kap, kpow, cs, pp, -half, half, tau_max, c[C_ESCAPE], delta, ev)
         if fric is not None:
-            return _search_slide_stop(kap, kpow, cs, cq, poly, pp, c, tau_max, ev, ev2, diag)
+            return _search_slide_stop(w, tau_max)
     elif mode == L.MODE_STUCK:
         side = c[C_SIDE]
         for k in range(NT):
@@ -472,9 +475,10 @@ def _search_event(kap, kpow, cx, cy, cs, cq, poly, pp, p, fric, a_f, c, tau_max,
 
 
 @njit(cache=True, inline='always')
-def _search_slide_stop(kap, kpow, cs, cq, poly, pp, c, tau_max, ev, ev2, diag):
+def _search_slide_stop(w, tau_max):
     """A sliding mass's slide stopping (sigma s' > 0 while it slides, 0 where it stops) before the gap's event:
-    2 if it comes first (ev then holds it), else 1."""
+    2 if it comes first (w.ev then holds it), else 1."""
+    kap, kpow, cs, cq, poly, pp, c, ev, ev2 = w.kap, w.kpow, w.cs, w.cq, w.poly, w.pp, w.c, w.ev, w.ev2
     sigma = c[C_SIGMA]
     for k in range(NT):
         cq[k] = sigma * cs[k] * kap[k]
@@ -482,7 +486,7 @@ def _search_slide_stop(kap, kpow, cs, cq, poly, pp, c, tau_max, ev, ev2, diag):
     dv = CONTACT_TOL * (bound_tab(kpow, cq, _NO_POLY, 0, 0.0) + 2.0 * abs(poly[1]))
     _poly4(pp, 2.0 * sigma * poly[1], 0.0)
     first_exit(kap, kpow, cq, pp, 0.0, np.inf, min(ev[0], tau_max), c[C_ESCAPE_V], dv, ev2)
-    diag[L.D_STEPS] += ev2[3]
+    w.diag[L.D_STEPS] += ev2[3]
     if ev2[0] < ev[0]:
         ev[0] = ev2[0]
         ev[1] = 0.0
@@ -491,9 +495,11 @@ def _search_slide_stop(kap, kpow, cs, cq, poly, pp, c, tau_max, ev, ev2, diag):
 
 
 @njit(cache=True, inline='always')
-def _advance(kap, eh, cx, cy, cv, cf, poly, z, p, fric, a_f, c, t, tau, ev, diag):
+def _advance(w, fric, a_f, t, tau):
     """Move the state to the segment's end, tau after t, and book its exact integrals: the force's work, the
     viscous loss, x^2 over the window, the time in contact, the friction's work; the energy's high mark."""
+    kap, eh, cx, cy, cv, cf, poly, z, p, c, ev, diag = (w.kap, w.eh, w.cx, w.cy, w.cv, w.cf, w.poly, w.z, w.p, w.c,
+                                                        w.ev, w.diag)
     diag[L.D_SEGMENTS] += 1.0
     diag[L.D_GRAZE] += ev[2]
     diag[L.D_STEPS] += ev[3]
@@ -536,11 +542,11 @@ def _book_stop(diag, stop, ev_kind, mode, ev_side):
 
 
 @njit(cache=True, inline='always')
-def _resolve_event(kap, kpow, cx, cy, cs, cq, pp, poly, z, t, p, pid, fric, a_f, c, ev_kind, ev_side, diag,
-                   rec, irec):
+def _resolve_event(w, t, pid, fric, a_f, ev_kind, ev_side, irec):
     """The contact's answer to the event at t: a slide comes to rest or starts, the wall lets go, or the mass
     strikes wall ev_side (then the impact, whether the mass sticks and whether the wall holds it, and its
     record).  Returns the number of impact records written."""
+    z, p, c, diag, rec = w.z, w.p, w.c, w.diag, w.rec
     half = 0.5 * p[L.P_GAP]
     mode = c[C_MODE]
     if fric is not None:
@@ -576,7 +582,7 @@ def _resolve_event(kap, kpow, cx, cy, cs, cq, pp, poly, z, t, p, pid, fric, a_f,
     diag[L.D_IMPACTS] += 1.0
     if t >= p[L.P_TWIN]:
         diag[L.D_IMPACTS_WIN] += 1.0
-    _strike(kap, kpow, cx, cy, cs, cq, pp, poly, z, t, p, pid, fric, a_f, c, ev_side, diag)
+    _strike(w, t, pid, fric, a_f, ev_side)
     if irec < rec.shape[0]:
         _record_impact(rec[irec], t, c, z, vm, wm, approach, p)
         irec += 1
@@ -584,9 +590,11 @@ def _resolve_event(kap, kpow, cx, cy, cs, cq, pp, poly, z, t, p, pid, fric, a_f,
 
 
 @njit(cache=True, inline='always')
-def _strike(kap, kpow, cx, cy, cs, cq, pp, poly, z, t, p, pid, fric, a_f, c, side, diag):
+def _strike(w, t, pid, fric, a_f, side):
     """The impact on wall `side` (Newton's law), then the mass's contact: it rebounds, or it sticks (a rebound
     too slow to clear the contact tolerance is a plastic end) and the wall holds it or lets it go."""
+    kap, kpow, cx, cy, cs, cq, pp, poly, z, p, c, diag = (w.kap, w.kpow, w.cx, w.cy, w.cs, w.cq, w.pp, w.poly, w.z,
+                                                          w.p, w.c, w.diag)
     stuck = _apply_impact(z, side, p, diag)
     c[C_SIDE] = side
     if fric is not None:
@@ -671,24 +679,22 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
     """
     rows = np.zeros((NROWS, NT), dtype=np.complex128)
     rows[W_POWERED, :] = np.nan
-    kpow = np.zeros((5, NT))
-    vec = np.zeros(NVEC)
-    clock = np.zeros(4)
-    c = np.zeros(NCONTACT, dtype=np.int64)
-    return _loop(p, z_init, code_init, pid, fric, rec, diag, z_out, rows, kpow, vec, clock, c)
+    owners = (rows, np.zeros((5, NT)), np.zeros(NVEC), np.zeros(4), np.zeros(NCONTACT, dtype=np.int64))
+    return _loop(p, z_init, code_init, pid, fric, rec, diag, z_out, owners)
 
 
 @njit(cache=True)
-def _loop(p, z_init, code_init, pid, fric, rec, diag, z_out, rows, kpow, vec, clock, c):
-    """run's loop over segments, in the workspace run allocated (rows, kpow, vec, clock, c) and holds while this
-    runs.  Every array is taken borrowed (bundles.borrowed: no reference of its own), so passing it to a step
-    costs no reference count: the counts were a quarter of a run when the loop was written as these steps."""
-    rows, kpow, vec, clock, c = borrowed(rows), borrowed(kpow), borrowed(vec), borrowed(clock), borrowed(c)
-    p, rec, diag, z = borrowed(p), borrowed(rec), borrowed(diag), borrowed(z_out)
-    kap, cx, cy, cs = rows[W_KAP], rows[W_CX], rows[W_CY], rows[W_CS]
-    cv, cq, cf, eh, kap_powered = rows[W_CV], rows[W_CQ], rows[W_CF], rows[W_EH], rows[W_POWERED]
-    poly, pp = vec[V_POLY:V_PP], vec[V_PP:V_EV]  # pp: (0, p1, p2, 0), the polynomial part as the search takes it
-    ev, ev2 = vec[V_EV:V_EV2], vec[V_EV2:NVEC]
+def _loop(p, z_init, code_init, pid, fric, rec, diag, z_out, owners):
+    """run's loop over segments, in the workspace run allocated and holds while this runs (owners: the complex
+    rows, the |kap| powers, the real vectors, the event guard's clock and the contact state).  Every array is
+    taken borrowed (bundles.borrowed: no reference of its own), so handing the bundle to a step costs no
+    reference count: the counts were a quarter of a run when the loop was written as these steps."""
+    rows, kpow, vec, clock, c = owners
+    rows, vec, clock = borrowed(rows), borrowed(vec), borrowed(clock)
+    w = PaperWork(rows[W_KAP], rows[W_CX], rows[W_CY], rows[W_CS], rows[W_CV], rows[W_CQ], rows[W_CF], rows[W_EH],
+                  borrowed(kpow), rows[W_POWERED], vec[V_POLY:V_PP], vec[V_PP:V_EV], vec[V_EV:V_EV2],
+                  vec[V_EV2:NVEC], borrowed(c), borrowed(p), borrowed(z_out), borrowed(diag), borrowed(rec))
+    z, ev, c, diag = w.z, w.ev, w.c, w.diag
     for i in range(L.NDIAG):
         diag[i] = 0.0
     for i in range(4):
@@ -706,12 +712,12 @@ def _loop(p, z_init, code_init, pid, fric, rec, diag, z_out, rows, kpow, vec, cl
     irec = 0
     while t < t_end:
         tau_max = t_end - t
-        if _build_motion(kap, cx, cy, poly, z, t, p, pid, fric, a_f, cq, pp, c):
+        if _build_motion(w, t, pid, fric, a_f):
             continue
-        _velocity_and_powers(kap, cx, cv, kpow, kap_powered)
-        ev_kind = _search_event(kap, kpow, cx, cy, cs, cq, poly, pp, p, fric, a_f, c, tau_max, ev, ev2, diag)
+        _velocity_and_powers(w)
+        ev_kind = _search_event(w, fric, a_f, tau_max)
         tau = min(ev[0], tau_max)
-        _advance(kap, eh, cx, cy, cv, cf, poly, z, p, fric, a_f, c, t, tau, ev, diag)
+        _advance(w, fric, a_f, t, tau)
         t = t + tau
         c[C_ESCAPE] = 0
         c[C_ESCAPE_V] = 0
@@ -721,8 +727,7 @@ def _loop(p, z_init, code_init, pid, fric, rec, diag, z_out, rows, kpow, vec, cl
         if stop != 0:
             _book_stop(diag, stop, ev_kind, c[C_MODE], ev[1])
             break
-        irec = _resolve_event(kap, kpow, cx, cy, cs, cq, pp, poly, z, t, p, pid, fric, a_f, c, ev_kind,
-                              int(ev[1]), diag, rec, irec)
+        irec = _resolve_event(w, t, pid, fric, a_f, ev_kind, int(ev[1]), irec)
     diag[L.D_E1] = _energy(z, p)
     diag[L.D_NREC] = irec
     diag[L.D_TEND] = t

@@ -94,7 +94,14 @@ def _run_paper(scene: Scene, measures: frozenset, record: int, times) -> SceneRe
 
 
 def _run_scene(scene: Scene, measures: frozenset, record: int, times) -> SceneResult:
-    return simulate_scene(scene, record=record, times=times, peaks=peak_groups(measures))
+    return simulate_scene(scene, record=record, times=times, peaks=peak_groups(measures), window=has_window(measures))
+
+
+def has_window(measures: frozenset) -> bool:
+    """Whether the measures read the window's square of the roof: the amplitude, or the roof's RMS that "peaks"
+    reports with its peaks.  A run asked for neither (the collapse stage's: impacts and drifts) integrates no
+    window, and its amplitude and RMS are NaN."""
+    return "amplitude" in measures or "peaks" in measures
 
 
 def peak_groups(measures: frozenset) -> tuple:
@@ -117,7 +124,7 @@ def simulate(scene: Scene, measures=DEFAULT_MEASURES, *, record: int = 0, times=
     impact's time, unit, side, velocities and impulse, up to `record` of them), "samples" (every degree of freedom's
     displacement and velocity at `times`, a sorted array of instants).  Asking only for what is read lets the
     dispatch pick the fastest loop that measures it, and the scene loop certify only the peaks that are read: a
-    peak not asked for is NaN.
+    peak not asked for is NaN, and so are the amplitude and the roof's RMS unless "amplitude" or "peaks" is asked.
     """
     asked = frozenset(measures)
     unknown = sorted(asked - set(MEASURES))

@@ -109,6 +109,7 @@ from impact.engine.layout import (
     P_TEND,
     P_TWIN,
     P_VSTICK,
+    P_WINDOW,
     R_IMPULSE,
     R_SIDE,
     R_STUCK,
@@ -733,15 +734,16 @@ def step_tables(s, key, tau, dt, kap, ek, pair, single, ramp, dtab):
 
 @njit(cache=True, inline='always')
 def monitor_modal(w, s, n, tau, t, t_win, monitors, ramp, harmonic, yielding):
-    """Certified peaks of every monitor over the segment, and the roof's square integrated over the window;
-    ramp: (r0, r1), the record's value at the segment's start and its slope.
+    """Certified peaks of every monitor over the segment, and the roof's square integrated over the window from
+    t_win (inf: a run whose window no one reads); ramp: (r0, r1), the record's value at the segment's start and
+    its slope.
 
     Rows and curvature bounds come from the modal tables: a segment whose ends
     and bound cannot beat the running peak is settled without the search, as
     peak_abs's own first test would settle it.  A monitor whose peak has
     reached its cap is not searched again: a stroke at its wall, or a monitor
     the run was not asked to certify (cap 0, scenes.PEAK_GROUPS); the first
-    (the roof) still gives the window its square.
+    (the roof) still gives the window its square where the segment reaches into it.
     """
     kap, kpow, ek, cm, pm, stack, wt, diag = w.kap, w.kpow, w.ek, w.cm, w.pm, w.stack, w.wt, w.diag
     mon_peak, mon_peak_t = w.mon_peak, w.mon_peak_t
@@ -749,10 +751,11 @@ def monitor_modal(w, s, n, tau, t, t_win, monitors, ramp, harmonic, yielding):
     r0, r1 = ramp
     for m in range(mon_rows.shape[0]):
         searched = mon_peak[m] < mon_cap[m]
-        if not searched and m != 0:
+        squared = m == 0 and t + tau > t_win
+        if not searched and not squared:
             continue
         monitor_row(w, s, m, n, monitors, r0, r1, harmonic)
-        if m == 0 and t + tau > t_win:
+        if squared:
             window_square(w, tau, t, t_win, yielding)
         if not searched:
             continue
@@ -1353,6 +1356,7 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
     st_b = borrowed_state(st)
     t = p[P_T0]
     t_end = p[P_TEND]
+    t_square = p[P_TWIN] if p[P_WINDOW] != 0.0 else np.inf  # where the roof's square starts: never if unread
     _start(t, model, springs, fric, harm, record, yld, st_b, instant, out)
     its = 0  # the next sample time
     while its < ts.shape[0] and ts[its] < t:
@@ -1417,7 +1421,7 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
             # modal tables assume; and beside a stiff pendulum the tables lost 3e-9 of a probe scene's energy
             # balance on the yielding branches, the rows 2.6e-10 (tests/test_exactness.py, yielding probe 97)
             integrate_segment(w, tau, building, units, springs, harm, record, (theta0, r0, r1))
-        monitor_modal(w, s, n, tau, t, p[P_TWIN], monitors, (r0, r1), harm is not None, yld is not None)
+        monitor_modal(w, s, n, tau, t, t_square, monitors, (r0, r1), harm is not None, yld is not None)
         if its < ts.shape[0]:
             its = sample_segment(kap, C, P, t, tau, ts, its, samples, qs, vs)
         move_to_end(w, building, units, springs, fric, yld, tau)

@@ -255,7 +255,7 @@ def _yield_arrays(scene: Scene) -> YieldArrays | None:
                        zf.copy(), zi.copy(), zi.copy(), zf.copy(), zi.copy(), zi.copy(), zf.copy(), zi.copy())
 
 
-def _scene_arrays(scene: Scene, peaks=PEAK_GROUPS):
+def _scene_arrays(scene: Scene, peaks=PEAK_GROUPS, window: bool = True):
     b = scene.building
     omega1 = b.omega1
     kind, floor, mass, gap, e, k, c, a_f = _unit_arrays(scene, omega1)
@@ -276,6 +276,7 @@ def _scene_arrays(scene: Scene, peaks=PEAK_GROUPS):
     p[L.P_T0] = 0.0
     p[L.P_TEND] = scene.t_end
     p[L.P_TWIN] = scene.t_window
+    p[L.P_WINDOW] = 1.0 if window else 0.0
     p[L.P_MAXEV] = scene.max_events_per_period
     p[L.P_PERIOD] = 2.0 * math.pi / omega1
     if harm is not None:
@@ -311,14 +312,16 @@ def run_arrays(arrays: dict, record: int = 0, times=None):
     return result
 
 
-def simulate_scene(scene: Scene, *, record: int = 0, times=None, peaks=PEAK_GROUPS) -> SceneResult:
+def simulate_scene(scene: Scene, *, record: int = 0, times=None, peaks=PEAK_GROUPS, window: bool = True
+                   ) -> SceneResult:
     """Run a scene on the exact core.
 
     record: keep up to this many impact records; times: sorted times at which
     to sample the state of every degree of freedom (dense output); peaks: the groups of monitors
-    (PEAK_GROUPS) whose peaks the run certifies, the others NaN.
+    (PEAK_GROUPS) whose peaks the run certifies, the others NaN; window: whether the run integrates the roof's
+    square over the window (the amplitude and the RMS, NaN without it).
     """
-    arrays = _scene_arrays(scene, peaks)
+    arrays = _scene_arrays(scene, peaks, window)
     key = _signature_key(arrays)
     if key not in _WARM:
         with compile_lock(_kernel_name(key), _kernel_label(key), fresh=(run_scene,)):
@@ -326,7 +329,7 @@ def simulate_scene(scene: Scene, *, record: int = 0, times=None, peaks=PEAK_GROU
         _WARM.add(key)
     else:
         out = run_arrays(arrays, record, times)
-    return _result(scene, arrays, out, peaks)
+    return _result(scene, arrays, out, peaks, window)
 
 
 _WARM: set = set()  # the loops' specialisations compiled (or loaded) in this process
@@ -350,14 +353,14 @@ def _kernel_label(key: tuple) -> str:
     return "the engine's scene loop" + (f" for scenes with {', '.join(parts)}" if parts else "")
 
 
-def _result(scene: Scene, arrays: dict, out: dict, groups=PEAK_GROUPS) -> SceneResult:
+def _result(scene: Scene, arrays: dict, out: dict, groups=PEAK_GROUPS, window: bool = True) -> SceneResult:
     nf = scene.building.storeys
     diag = out["diag"]
     span = diag[L.D_TEND] - scene.t_window
     collapsed = bool(diag[L.D_COLLAPSE])
     # a collapse ends the run on purpose: its peaks up to the collapse stand, its window's rms does not
     complete = not diag[L.D_CAP] and (span > 0 or collapsed)
-    rms = math.sqrt(out["x2"][0] / span) if complete and not collapsed else math.nan
+    rms = math.sqrt(out["x2"][0] / span) if window and complete and not collapsed else math.nan
     records = None
     if out["recs"].shape[0]:
         n = int(diag[L.D_NREC])
