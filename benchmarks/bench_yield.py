@@ -5,6 +5,11 @@ Part 1, the engine (one process, minimum of repeats after a warm-up that compile
 and with storeys that yield at a drift of YIELD_DRIFT_M (hardening 0.05).  Printed: ms per run, us per event
 (impacts and yield and unloading events), and the yielding run's time over the elastic one's.
 
+Part 1b, the collapse stage's run (collapse.runs.collapse_run): the same building with P-delta, storeys 3.5 m
+high yielding at 2 cm (b = 0.05), a 10 % collapse drift ratio, El Centro at 0.5 g, bare and with a CID, a PID and
+a TMD of 2 %, asked for what the stage reads (impacts and drifts: no window) against the same run asked for the
+amplitude too (the window's square integrated, as every run was before run.has_window): the window's cost.
+
 Part 2, the peer: a one-storey building (T = 1 s, zeta = 5 %, yield drift 30 mm, perfectly plastic) under El
 Centro at 0.5 g.  Ours is exact (b = 0); OpenSees has one zeroLength Steel01 (b = 1e-9, its nearest to
 perfectly plastic) beside a viscous dashpot of the same damping, Newmark's average acceleration and Newton,
@@ -25,6 +30,7 @@ from pathlib import Path
 import numpy as np
 from bench_scene import best_time
 
+from impact.engine.run import simulate
 from impact.engine.scenes import simulate_scene
 from impact.model.building import Building
 from impact.model.records import load_record
@@ -60,6 +66,26 @@ def engine_cases(repeats: int) -> list[dict]:
         yielded["over_elastic"] = yielded["ms_per_run"] / elastic["ms_per_run"]
         print(json.dumps({"case": label, "yielding_over_elastic": yielded["over_elastic"]}))
         cases += [elastic, yielded]
+    return cases
+
+
+def collapse_run_cases(repeats: int) -> list[dict]:
+    three = Building.uniform(3, 1.0, 0.02)
+    archetype = three.yielding(0.02, HARDENING, storey_height=3.5, p_delta=True)
+    quake = GroundMotion.from_record(load_record("elcentro"), pga_g=0.5)
+    m = 0.02 * three.total_mass
+    dampers = {"bare": (), "CID": (Damper("cid", m, gap=0.05, e=0.5),),
+               "PID": (Damper("pid", m, gap=0.1, e=0.5, tuning=1.0),), "TMD": (Damper("tmd", m, tuning=0.98, damping=0.08),)}
+    cases = []
+    for label, ds in dampers.items():
+        scene = Scene(archetype, ds, quake, collapse_drift_ratio=0.1)
+        plain, res = best_time(lambda: simulate(scene, measures=("impacts", "drifts")), repeats)
+        window, _ = best_time(lambda: simulate(scene, measures=("amplitude", "impacts", "drifts")), repeats)
+        out = {"case": f"collapse run, {label}", "ms_per_run": 1e3 * plain, "ms_with_window": 1e3 * window,
+               "over_with_window": plain / window, "peak_drift_m": float(np.max(res.peak_drifts)),
+               "impacts": res.impacts}
+        print(json.dumps(out))
+        cases.append(out)
     return cases
 
 
@@ -135,7 +161,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default="benchmarks/results/yield.json")
     args = ap.parse_args(argv)
     reps = 2 if args.quick else 7
-    out = {"engine": engine_cases(reps)}
+    out = {"engine": engine_cases(reps), "collapse_run": collapse_run_cases(reps)}
     if not args.no_peer:
         out["peer"] = peer_cases(reps, args.budget_s)
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
