@@ -9,9 +9,10 @@ import pytest
 
 from impact.cli import main
 from impact.engine.paper import sweep
-from impact.model.params import Protocol, System
+from impact.model.params import Protocol, System, curve_id, curve_specs
 from impact.outputs.files import write_dataset
 from impact.stages.design import chart_config, chart_specs, impact_chart, tmd_chart, tmd_mu_grid
+from impact.stages.robustness.designs import design_curves
 from impact.stages.sweeps import freq_grid, run_curve
 
 CFG = {
@@ -45,6 +46,18 @@ def chart_dir(sweeps, tmp_path_factory):
 def _design_json(capsys, *argv):
     assert main(["design", *argv, "--json"]) == 0
     return json.loads(capsys.readouterr().out)
+
+
+def test_the_charts_and_the_robustness_designs_plan_their_curves_one_way():
+    """A kind with a spring gets a curve per tuning, one without gets one; the charts' and the robustness
+    designs' curves are distinct files."""
+    design = {"mu": [0.01, 0.02], "e": [0.25, 0.65], "pid_tunings": [0.5, 1.0]}
+    cid, pid = chart_specs(design, "cid"), chart_specs(design, "pid")
+    assert len(cid) == 4 and len(pid) == 8 and all("rp" not in s for s in cid) and {s["rp"] for s in pid} == {0.5, 1.0}
+    assert len({curve_id(s) for s in cid + pid}) == 12
+    robust = design_curves({"robustness": {"mu": 0.01, "e": 0.25, "pid_tunings": [1.0, 1.5]}})
+    assert [curve_id(s) for s in robust] == ["cid_mu0.01_e0.25", "pid_mu0.01_e0.25_rp1", "pid_mu0.01_e0.25_rp1.5"]
+    assert robust == curve_specs(("cid", "pid"), [0.01], [0.25], [1.0, 1.5])
 
 
 def test_a_chart_is_each_runs_refined_peak_the_worst_over_starts(sweeps):

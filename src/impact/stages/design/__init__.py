@@ -28,7 +28,7 @@ import xarray as xr
 from impact.closed_form.tmd import tmd_optimum, tmd_peak
 from impact.engine.paper import sweep
 from impact.model.kinds import KINDS, TMD
-from impact.model.params import ParameterError, Protocol, System, a_max, frequency_grid
+from impact.model.params import ParameterError, Protocol, System, a_max, curve_specs, frequency_grid
 from impact.model.scene import DAMPER_KINDS
 from impact.stages.robustness.designs import Design
 from impact.stages.robustness.runs import scene_peak_response
@@ -48,9 +48,7 @@ class DesignError(ValueError):
 def chart_specs(design_cfg: dict, kind: str) -> list[dict]:
     """The sweep curves an impact damper's chart reads: every (e, mu[, r']) of the design section, r' (the
     design section's pid_tunings) for a kind with a spring."""
-    tunings = [{"rp": rp} for rp in design_cfg["pid_tunings"]] if KINDS[kind].spring else [{}]
-    return [{"damper": kind, "mu": mu, "e": e, **tuning}
-            for e in design_cfg["e"] for mu in design_cfg["mu"] for tuning in tunings]
+    return curve_specs((kind,), design_cfg["mu"], design_cfg["e"], design_cfg["pid_tunings"])
 
 
 def chart_config(cfg: dict) -> dict:

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from impact.model.kinds import CID, KINDS, PID, TMD, damper_kinds
-from impact.model.params import MAX_TUNING, a_max, check_choice, check_fields
+from impact.model.params import MAX_TUNING, a_max, check_choice, check_fields, curve_specs
 from impact.outputs.datasets import optimum
 
 BAND = 0.25   # "X_m stays within 25 % of its design value"
@@ -114,8 +114,7 @@ def design_curves(cfg: dict) -> list[dict]:
     """The sweep curves whose optimum gaps are the impact dampers' design points: the CID's and the PID's at
     each tuning, of the robustness section's mass ratio and restitution."""
     rb = cfg["robustness"]
-    return ([{"damper": CID, "mu": rb["mu"], "e": rb["e"]}]
-            + [{"damper": PID, "mu": rb["mu"], "e": rb["e"], "rp": rp} for rp in rb["pid_tunings"]])
+    return curve_specs((CID, PID), (rb["mu"],), (rb["e"],), rb["pid_tunings"])
 
 
 def designs_from_study(cfg: dict, optima: dict, tmd: dict) -> dict:
