@@ -10,6 +10,11 @@ high yielding at 2 cm (b = 0.05), a 10 % collapse drift ratio, El Centro at 0.5 
 a TMD of 2 %, asked for what the stage reads (impacts and drifts: no window) against the same run asked for the
 amplitude too (the window's square integrated, as every run was before run.has_window): the window's cost.
 
+Part 1c, the collapse stage's hunt (collapse.runs.traced): on the study's 3-storey 1 s archetype (config/config.yaml's
+collapse section) under HUNT_MOTIONS, a CID, a PID and a TMD of 2 % (the impact dampers' clearance at gap ratio 1)
+traced to collapse from the bare archetype's bracket of each motion against the same traced from the hunt's first
+level, one after the other: runs, seconds and whether the two brackets overlap.
+
 Part 2, the peer: a one-storey building (T = 1 s, zeta = 5 %, yield drift 30 mm, perfectly plastic) under El
 Centro at 0.5 g.  Ours is exact (b = 0); OpenSees has one zeroLength Steel01 (b = 1e-9, its nearest to
 perfectly plastic) beside a viscous dashpot of the same damping, Newmark's average acceleration and Newton,
@@ -28,13 +33,18 @@ import time
 from pathlib import Path
 
 import numpy as np
+import yaml
 from bench_scene import best_time
 
 from impact.engine.run import simulate
 from impact.engine.scenes import simulate_scene
 from impact.model.building import Building
+from impact.model.kinds import CID, PID, TMD
 from impact.model.records import load_record
 from impact.model.scene import Damper, GroundMotion, Scene
+from impact.stages.collapse.plan import archetype
+from impact.stages.collapse.runs import traced
+from impact.stages.ida.runs import bare_runs, design_peak, designed_damper
 
 YIELD_DRIFT_M, HARDENING = 0.01, 0.05
 PEER = {"period_s": 1.0, "zeta": 0.05, "yield_drift_m": 0.03, "pga_g": 0.5, "floor_mass_kg": 1.0e5}
@@ -84,6 +94,37 @@ def collapse_run_cases(repeats: int) -> list[dict]:
         out = {"case": f"collapse run, {label}", "ms_per_run": 1e3 * plain, "ms_with_window": 1e3 * window,
                "over_with_window": plain / window, "peak_drift_m": float(np.max(res.peak_drifts)),
                "impacts": res.impacts}
+        print(json.dumps(out))
+        cases.append(out)
+    return cases
+
+
+#: far-field and near-field motions of FEMA P695's sets (both components of two records each)
+HUNT_MOTIONS = ("fema-farfield:1:a", "fema-farfield:1:b", "fema-farfield:7:a", "fema-farfield:7:b",
+                "fema-nearfield:2:a", "fema-nearfield:2:b", "fema-nearfield:9:a", "fema-nearfield:9:b")
+
+
+def collapse_hunt_cases(building_name: str = "s3_T1") -> list[dict]:
+    study = yaml.safe_load((Path(__file__).resolve().parents[1] / "config" / "config.yaml").read_text())
+    cfg, loads = study["collapse"], study["loads"]
+    ida = {**study["ida"], "motions": list(HUNT_MOTIONS)}
+    building = archetype(cfg, ida, loads, building_name)
+    ida_bare = bare_runs(ida, loads, building_name)
+    bare = traced(cfg, building, (), ida_bare)
+    peak = design_peak(ida_bare, ida["design_sa_g"])
+    cases = []
+    for kind in (CID, PID, TMD):
+        dampers = (designed_damper(loads, building, kind, 0.02, {0.02: 1.0}, peak),)
+        start = time.perf_counter()
+        from_bare = traced(cfg, building, dampers, ida_bare, bare)
+        middle = time.perf_counter()
+        hunted = traced(cfg, building, dampers, ida_bare)
+        end = time.perf_counter()
+        out = {"case": f"collapse hunt, {building_name}, {kind} of 2 %", "motions": len(HUNT_MOTIONS),
+               "runs_from_bare": int(from_bare["runs"].sum()), "runs_hunted": int(hunted["runs"].sum()),
+               "s_from_bare": middle - start, "s_hunted": end - middle, "time_ratio": (middle - start) / (end - middle),
+               "brackets_overlap": bool((from_bare["standing_sa"] < hunted["collapse_sa"]).all()
+                                        and (hunted["standing_sa"] < from_bare["collapse_sa"]).all())}
         print(json.dumps(out))
         cases.append(out)
     return cases
@@ -161,7 +202,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default="benchmarks/results/yield.json")
     args = ap.parse_args(argv)
     reps = 2 if args.quick else 7
-    out = {"engine": engine_cases(reps), "collapse_run": collapse_run_cases(reps)}
+    out = {"engine": engine_cases(reps), "collapse_run": collapse_run_cases(reps), "collapse_hunt": collapse_hunt_cases()}
     if not args.no_peer:
         out["peer"] = peer_cases(reps, args.budget_s)
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)

@@ -31,6 +31,7 @@ rule collapse_damper:
     input:
         ida_bare=rules.ida_bare.output[0],
         design=ida_design,
+        bare=rules.collapse_bare.output[0],
     output:
         "results/collapse/runs/{building}/{damper}.nc",
     log:

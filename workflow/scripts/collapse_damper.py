@@ -11,7 +11,7 @@ with logged(snakemake.log[0]) as log:
     wc, study = snakemake.wildcards, snakemake.params.study
     gap_ratios = design_gap_ratios(snakemake.input.design)
     ds = damper_collapse(study["collapse"], study["ida"], study["loads"], wc.building, wc.damper,
-                         xr.load_dataset(snakemake.input.ida_bare), gap_ratios)
+                         xr.load_dataset(snakemake.input.ida_bare), gap_ratios, xr.load_dataset(snakemake.input.bare))
     log.info("%s %s: gap ratios %s; %d runs, %d at the event cap", wc.building, wc.damper, gap_ratios,
              int(ds["runs"].sum()), int((ds["run_event_cap_reached"] == 1).sum()))
     write_dataset(ds, snakemake.output[0], config=job_config(snakemake))

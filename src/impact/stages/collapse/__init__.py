@@ -13,7 +13,8 @@ yield drift is that strength over its elastic stiffness, and past it the storey 
 Every ground motion of the IDA's set is traced to collapse, one by one, by hunt and fill (Vamvatsikos & Cornell 2004):
 the Sa(T1, 5 %) level rises by growing steps until a run collapses, the bracket between the last level that stood and
 the first that collapsed is bisected to `resolution` of its top, and the widest gaps of the drift curve below are
-filled.  A run collapses when a storey's drift reaches `drift_limit` of its height: the engine locates that instant
+filled.  A damper's hunt starts at the bare archetype's bracket of the same motion and steps away from it only where
+the outcome there differs (docs/model.md).  A run collapses when a storey's drift reaches `drift_limit` of its height: the engine locates that instant
 exactly and stops (a drift running away on a negative tangent reaches it too; `free_vibration_s` of still ground
 after each record lets one that runs away after the shaking finish).  The runs never fail to converge: a run that
 stops at the event cap or the stall guard ends its motion's trace, is kept, flagged, and counted in the tables.

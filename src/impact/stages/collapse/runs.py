@@ -3,6 +3,7 @@ by hunt and fill (Vamvatsikos & Cornell 2004)."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -32,6 +33,9 @@ RUN_MEASURES = {
     "run_event_cap_reached": ("whether the run stopped at the event cap or the stall guard", None),
     "run_impacts": ("impacts of the damper's units in the run", "1"),
 }
+HUNT_UP = "up the hunt's levels from the first (collapse.hunt)"
+HUNT_FROM_BARE = ("from the bare archetype's bracket of the motion, stepping away from it until the outcome turns "
+                  "(up the hunt's levels where the bare archetype found none)")
 FLAGS = {"run_collapsed": ("stood", "collapsed"), "run_event_cap_reached": EVENT_CAP_MEANINGS}
 WHOLE = ("run_collapsed", "run_event_cap_reached", "run_impacts", "runs", "unresolved")
 
@@ -71,12 +75,14 @@ def collapse_run(building: Building, dampers: tuple, motion: GroundMotion, drift
             "run_event_cap_reached": int(bool(res.diagnostics["event_cap_reached"])), "run_impacts": res.impacts}
 
 
-def trace(run_at, cfg: dict) -> Trace:
-    """Hunt: the hunt's levels up to the first collapse (halving down from the first level if it collapses).
-    Bisect the bracket until it is narrower than `resolution` of its top.  Fill: the widest gaps below the bracket
-    get a run each, `fill` times, so the drift curve is drawn where it climbs; a fill run that collapses (a curve
-    that resurrects above it) becomes the collapse, and its bracket is bisected in turn.  A run that stops at the
-    event cap ends the trace, flagged."""
+def trace(run_at, cfg: dict, reference: Trace | None = None) -> Trace:
+    """Hunt: the hunt's levels up to the first collapse (halving down from the first level if it collapses), or,
+    given a `reference` trace of the same motion that found a collapse (the bare archetype's), its bracket's ends
+    first, stepping away from them by growing steps until the outcome turns.  Bisect the bracket until it is
+    narrower than `resolution` of its top.  Fill: the widest gaps below the bracket get a run each, `fill` times,
+    so the drift curve is drawn where it climbs; a fill run that collapses (a curve that resurrects above it)
+    becomes the collapse, and its bracket is bisected in turn.  A run that stops at the event cap ends the trace,
+    flagged."""
     out = Trace()
 
     def collapses(level: float) -> bool:
@@ -86,10 +92,19 @@ def trace(run_at, cfg: dict) -> Trace:
         return bool(out.runs[-1]["run_collapsed"])
 
     try:
-        _hunt_fill(out, collapses, cfg)
+        if _has_bracket(reference):
+            _hunt_from(out, collapses, cfg, reference)
+        else:
+            _hunt_fill(out, collapses, cfg)
     except _Unresolved:
         out.unresolved = True
     return out
+
+
+def _has_bracket(reference: Trace | None) -> bool:
+    """Whether a reference trace ended on a bracket a hunt may start from: a collapse with a level standing below."""
+    return (reference is not None and not reference.unresolved and reference.collapse is not None
+            and reference.standing > 0.0)
 
 
 def _hunt_fill(out: Trace, collapses, cfg: dict) -> None:
@@ -102,9 +117,55 @@ def _hunt_fill(out: Trace, collapses, cfg: dict) -> None:
         return
     if out.standing == 0.0 and not _hunt_down(out, collapses):
         return
+    _narrow_and_fill(out, collapses, cfg)
+
+
+def _narrow_and_fill(out: Trace, collapses, cfg: dict) -> None:
     _narrow(out, collapses, cfg["resolution"])
     for _ in range(cfg["fill"]):
         _fill_widest_gap(out, collapses, cfg["resolution"])
+
+
+def _hunt_from(out: Trace, collapses, cfg: dict, reference: Trace) -> None:
+    """The hunt started at a reference's bracket: a damper of a few per cent of the building's mass moves a motion's
+    collapse intensity by little, so its ends are the likeliest bracket.  Where the outcome there differs, the level
+    steps away by `resolution`, twice that, four times, ... of the last (down, at most halving; up, to the hunt's
+    top), until it turns.  The bracket found is a stand below a collapse, as the hunt's, narrowed and filled alike."""
+    if collapses(reference.collapse):
+        out.collapse = reference.collapse
+        if not _step_down(out, collapses, reference.standing, cfg["resolution"]):
+            return
+    else:
+        out.standing = reference.collapse
+        if not _step_up(out, collapses, cfg["resolution"], cfg["hunt"]["max_sa_g"]):
+            return
+    _narrow_and_fill(out, collapses, cfg)
+
+
+def _step_down(out: Trace, collapses, level: float, step: float) -> bool:
+    """From `level` down, each step twice the last (a halving at most), until a run stands; False if none does
+    within the steps to a halving and HALVINGS more (the bracket is then [0, lowest])."""
+    for _ in range(HALVINGS + int(math.log2(0.5 / step)) + 1):
+        if not collapses(level):
+            out.standing = level
+            return True
+        out.collapse = level
+        level *= 1.0 - step
+        step = min(2.0 * step, 0.5)
+    return False
+
+
+def _step_up(out: Trace, collapses, step: float, top: float) -> bool:
+    """From the standing level up, each step twice the last, to the hunt's top at most, until a run collapses;
+    False if the top stands (no collapse, as the hunt's)."""
+    while out.standing < top:
+        level = min(out.standing * (1.0 + step), top)
+        if collapses(level):
+            out.collapse = level
+            return True
+        out.standing = level
+        step *= 2.0
+    return False
 
 
 #: halvings below the first hunt level before a motion is said to collapse below what the study resolves
@@ -172,13 +233,26 @@ def _motions(ida_bare: xr.Dataset) -> tuple[list[str], dict[str, Record], dict[s
     return keys, {k: load_suite_record(k) for k in keys}, dict(zip(keys, ida_bare["sa_record"].values.tolist()))
 
 
-def traced(cfg: dict, building: Building, dampers: tuple, ida_bare: xr.Dataset) -> xr.Dataset:
-    """Every ground motion of the linear IDA's set traced to collapse on one archetype with its dampers."""
+def traced(cfg: dict, building: Building, dampers: tuple, ida_bare: xr.Dataset,
+           reference: xr.Dataset | None = None) -> xr.Dataset:
+    """Every ground motion of the linear IDA's set traced to collapse on one archetype with its dampers, each from
+    its bracket in `reference` (the bare archetype's traces) where that found one."""
     keys, records, sa = _motions(ida_bare)
+    brackets = _brackets_of(reference, keys)
     traces = [trace(lambda level, key=key: collapse_run(
         building, dampers, with_free_vibration(records[key], sa[key], level, cfg["free_vibration_s"]),
-        cfg["drift_limit"]), cfg) for key in keys]
+        cfg["drift_limit"]), cfg, brackets[key]) for key in keys]
     return _traces_dataset(traces, keys).assign_coords(group=ida_bare["group"])
+
+
+def _brackets_of(reference: xr.Dataset | None, keys: list[str]) -> dict[str, Trace | None]:
+    """Each motion's bracket as a reference trace found it (its runs are not needed)."""
+    if reference is None:
+        return dict.fromkeys(keys)
+    ref = reference.sel(motion=keys)
+    collapse = [None if np.isnan(c) else float(c) for c in ref["collapse_sa"].values]
+    return {key: Trace(standing=float(s), collapse=c, unresolved=bool(u)) for key, s, c, u in
+            zip(keys, ref["standing_sa"].values, collapse, ref["unresolved"].values)}
 
 
 def _pushover_dataset(numbers: dict, building: Building, theta_max: float) -> xr.Dataset:
@@ -232,17 +306,18 @@ def bare_collapse(cfg: dict, ida: dict, loads: dict, building_name: str, ida_bar
     numbers = archetype_numbers(building, cfg, code_period(cfg, building.storey_height))
     ds = xr.merge([traced(cfg, building, (), ida_bare), _pushover_dataset(numbers, building, stability_limit(cfg))],
                   combine_attrs="no_conflicts")
-    return _described(ds, cfg, building_name, building, "bare")
+    return _described(ds, cfg, building_name, building, "bare").assign_attrs(hunt=HUNT_UP)
 
 
 def damper_collapse(cfg: dict, ida: dict, loads: dict, building_name: str, kind: str, ida_bare: xr.Dataset,
-                    gap_ratios: dict[float, float]) -> xr.Dataset:
-    """One damper type at each mass ratio, as the linear IDA designs it, on the archetype, traced to collapse."""
+                    gap_ratios: dict[float, float], bare: xr.Dataset) -> xr.Dataset:
+    """One damper type at each mass ratio, as the linear IDA designs it, on the archetype, traced to collapse, each
+    motion's hunt started at the `bare` archetype's bracket (`trace`)."""
     building = archetype(cfg, ida, loads, building_name)
     peak = design_peak(ida_bare, ida["design_sa_g"])
-    parts = [traced(cfg, building, (designed_damper(loads, building, kind, mr, gap_ratios, peak),), ida_bare)
+    parts = [traced(cfg, building, (designed_damper(loads, building, kind, mr, gap_ratios, peak),), ida_bare, bare)
              for mr in loads["mass_ratios"]]
     ds = xr.concat(parts, dim="mass_ratio", join="outer", coords="minimal",
                    compat="override").assign_coords(mass_ratio=list(loads["mass_ratios"]))
     ds["mass_ratio"].attrs = {"long_name": "damper mass over the building's total mass", "units": "1"}
-    return _described(ds, cfg, building_name, building, kind)
+    return _described(ds, cfg, building_name, building, kind).assign_attrs(hunt=HUNT_FROM_BARE)
