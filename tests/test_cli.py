@@ -26,6 +26,27 @@ def test_version_is_the_packages():
     assert proc.returncode == 0 and proc.stdout.strip() == f"impact {__version__}"
 
 
+def test_every_sub_command_is_one_entry_of_the_dispatch_table_and_loads_only_when_it_runs():
+    """The parser's sub-commands are COMMANDS' keys, each a function; the parser, the help and a refused flag load
+    the model alone (no numba, no xarray, no stage), and no module of the command line imports inside a function."""
+    import ast
+    from pathlib import Path
+
+    from impact.cli import COMMANDS, command
+
+    names = next(a for a in build_parser()._actions if a.dest == "command").choices
+    assert sorted(names) == sorted(COMMANDS) and all(callable(command(name)) for name in COMMANDS)
+    probe = "import sys, impact.cli; print(sorted(m for m in sys.modules if m.split('.')[0] in ('numba', 'xarray') " \
+            "or m.startswith('impact.stages')))"
+    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
+    assert proc.stdout.strip() == "[]"
+    for path in (Path(__file__).resolve().parents[1] / "src" / "impact" / "cli").glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                inner = [n for n in ast.walk(node) if isinstance(n, (ast.Import, ast.ImportFrom))]
+                assert not inner, (path.name, node.name)
+
+
 @pytest.mark.parametrize("command", ["run", "sweep", "quake", "masri", "design", "records"])
 def test_every_flag_with_a_default_says_it_in_its_help(command):
     parser = build_parser()

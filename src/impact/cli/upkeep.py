@@ -1,0 +1,41 @@
+"""The study's upkeep from the command line: impact compile (every kernel into numba's cache, once) and impact
+verify-archive (a study archive against its manifest)."""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+
+from impact.engine.jitcache import cache_dir
+from impact.engine.paper import ensure_compiled
+from impact.engine.scenes import compile_scene_loops
+from impact.model.kinds import KINDS, kinds_with
+from impact.model.params import ParameterError
+from impact.outputs.archive import archive_summary, check_archive
+from impact.rig.simulator import warm_up
+
+
+def verify_archive(args) -> dict:
+    """Re-check an archive against its manifest: exit 1 naming each differing entry on stderr."""
+    if not os.path.isfile(args.file):
+        raise ParameterError(f"{args.file}: no such archive (give results/archive/impact-study-<commit>.tar.gz)")
+    problems = check_archive(args.file)
+    for path, reason in problems:
+        print(f"{path}: {reason}", file=sys.stderr)
+    if problems:
+        raise SystemExit(1)
+    return archive_summary(args.file)
+
+
+def compile_kernels(args) -> dict:
+    """Compile every kernel the study runs into numba's on-disk cache, once (make setup runs it): each
+    specialisation of the scene loop on elastic buildings, the paper loop for each damper, the virtual test rig."""
+    start = time.perf_counter()
+    compile_scene_loops()
+    for kind in kinds_with("paper"):
+        for friction in (False, True) if KINDS[kind].slides else (False,):
+            ensure_compiled(kind, friction)
+    warm_up()
+    return {"compiled": "every kernel of the study", "cache": os.fspath(cache_dir()),
+            "seconds": round(time.perf_counter() - start, 1)}
