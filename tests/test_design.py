@@ -9,8 +9,9 @@ import pytest
 
 from impact.cli import main
 from impact.engine.paper import sweep
-from impact.model.params import Protocol, System, curve_id, curve_specs
+from impact.model.params import Protocol, System, curve_id
 from impact.outputs.files import write_dataset
+from impact.stages.curves import curve_specs
 from impact.stages.design import chart_config, chart_specs, impact_chart, tmd_chart, tmd_mu_grid
 from impact.stages.robustness.designs import design_curves
 from impact.stages.sweeps import freq_grid, run_curve

@@ -7,7 +7,9 @@ import os
 import sys
 import time
 
-from impact.engine.jitcache import cache_dir
+# the engine's name for its cache folder is private; making it public would edit the engine's sources, which
+# purges every compiled kernel and reruns the whole study (jitcache.sources_digest, code_deps)
+from impact.engine.jitcache import _cache_dir as cache_dir
 from impact.engine.paper import ensure_compiled
 from impact.engine.scenes import compile_scene_loops
 from impact.model.kinds import KINDS, kinds_with

@@ -59,7 +59,7 @@ def purge_stale_cache(dispatcher) -> None:
         pass  # a read-only cache: numba compiles in memory instead
 
 
-def cache_dir() -> Path:
+def _cache_dir() -> Path:
     return Path(os.environ.get("NUMBA_CACHE_DIR") or CORE / "__pycache__")
 
 
@@ -79,7 +79,7 @@ def compile_lock(what: str | None = None, label: str = "", fresh=()):
     dispatchers the block calls, whose caches are dropped first if the
     engine's sources changed since they were written.
     """
-    folder = cache_dir()
+    folder = _cache_dir()
     folder.mkdir(parents=True, exist_ok=True)
     stamp = folder / f"compiled-{what}-{sources_digest()}.stamp" if what else None
     with filelock.FileLock(folder / "impact-jit.lock"):

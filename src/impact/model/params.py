@@ -232,13 +232,6 @@ def _fmt(x: float) -> str:
     return f"{x:g}"
 
 
-def curve_specs(kinds, mus, es, tunings) -> list[dict]:
-    """The sweep curves of every damper kind, restitution e and mass ratio mu (in that order), and of every tuning r'
-    for a kind with a spring: the one way a stage plans the curves it reads."""
-    return [{"damper": kind, "mu": mu, "e": e, **tuning} for kind in kinds for e in es for mu in mus
-            for tuning in ([{"rp": rp} for rp in tunings] if KINDS[kind].spring else [{}])]
-
-
 def curve_id(spec: dict) -> str:
     """File-name id of a curve from its parameters, e.g. 'pid_mu0.01_e0.25_rp1'."""
     name = f"{spec['damper']}_mu{_fmt(spec['mu'])}_e{_fmt(spec['e'])}"

@@ -28,8 +28,9 @@ import xarray as xr
 from impact.closed_form.tmd import tmd_optimum, tmd_peak
 from impact.engine.paper import sweep
 from impact.model.kinds import KINDS, TMD
-from impact.model.params import ParameterError, Protocol, System, a_max, curve_specs, frequency_grid
+from impact.model.params import ParameterError, Protocol, System, a_max, frequency_grid
 from impact.model.scene import DAMPER_KINDS
+from impact.stages.curves import curve_specs
 from impact.stages.robustness.designs import Design
 from impact.stages.robustness.runs import scene_peak_response
 

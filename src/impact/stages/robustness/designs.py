@@ -11,8 +11,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from impact.model.kinds import CID, KINDS, PID, TMD, damper_kinds
-from impact.model.params import MAX_TUNING, a_max, check_choice, check_fields, curve_specs
+from impact.model.params import MAX_TUNING, a_max, check_choice, check_fields
 from impact.outputs.datasets import optimum
+from impact.stages.curves import curve_specs
 
 BAND = 0.25   # "X_m stays within 25 % of its design value"
 
