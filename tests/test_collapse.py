@@ -399,6 +399,11 @@ def test_the_numbers_results_md_reads_off_the_collapse_tables():
     assert f"θ up to {bare.theta_max.max():.2f}" in page
     assert f"`beta_RTR_fit`, {bare.beta_RTR_fit.min():.2f} to {bare.beta_RTR_fit.max():.2f}" in page
     assert f"ran {int(_docs_tables()['margins'].runs.sum()):,} runs" in page
+    # "the bare archetype 12 runs per ground motion on average, and each damper case ... 6.3"
+    margins = _docs_tables()["margins"]
+    per_motion = {bare: rows.runs.sum() / rows.motions.sum() for bare, rows in margins.groupby(margins.damper == "bare")}
+    assert f"the bare archetype {per_motion[True]:.0f} runs per ground motion" in " ".join(page.split())
+    assert f"same motion, {per_motion[False]:.1f} (it was 12" in " ".join(page.split())
     t = _docs_tables()
     top, verdict, groups = t["best"], t["verdicts"], t["groups"]
     # "where the best design's rise is clear it is a TMD's", "the PID rises clearly in one ..., on the 5-storey 2 s

@@ -61,9 +61,7 @@ def main(argv=None) -> int:
         ap.error(f"argument --average-from: {args.average_from} must be below --periods = {args.periods}")
     try:
         out = command(args.command)(args)
-    except ParameterError as exc:
-        ap.error(str(exc))
-    except RecordError as exc:
+    except (ParameterError, RecordError) as exc:
         ap.error(str(exc))
     try:
         if isinstance(out, str):  # a command's text for a person (impact design without --json)

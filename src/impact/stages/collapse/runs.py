@@ -115,7 +115,7 @@ def _hunt_fill(out: Trace, collapses, cfg: dict) -> None:
         out.standing = level
     if out.collapse is None:
         return
-    if out.standing == 0.0 and not _hunt_down(out, collapses):
+    if out.standing == 0.0 and not _step_down(out, collapses, 0.5 * out.collapse, 0.5):
         return
     _narrow_and_fill(out, collapses, cfg)
 
@@ -144,8 +144,9 @@ def _hunt_from(out: Trace, collapses, cfg: dict, reference: Trace) -> None:
 
 def _step_down(out: Trace, collapses, level: float, step: float) -> bool:
     """From `level` down, each step twice the last (a halving at most), until a run stands; False if none does
-    within the steps to a halving and HALVINGS more (the bracket is then [0, lowest])."""
-    for _ in range(HALVINGS + int(math.log2(0.5 / step)) + 1):
+    within HALVINGS runs more than the steps to a halving take (the bracket is then [0, lowest]).  From the first
+    hunt level a collapse halves at once (step 0.5): HALVINGS halvings."""
+    for _ in range(HALVINGS + math.ceil(math.log2(0.5 / step))):
         if not collapses(level):
             out.standing = level
             return True
@@ -170,17 +171,6 @@ def _step_up(out: Trace, collapses, step: float, top: float) -> bool:
 
 #: halvings below the first hunt level before a motion is said to collapse below what the study resolves
 HALVINGS = 6
-
-
-def _hunt_down(out: Trace, collapses) -> bool:
-    """Halve the level until a run stands; False if none does within HALVINGS (the bracket is then [0, lowest])."""
-    for _ in range(HALVINGS):
-        level = 0.5 * out.collapse
-        if not collapses(level):
-            out.standing = level
-            return True
-        out.collapse = level
-    return False
 
 
 #: bisections at most: a bracket from 0 (no level below the collapse stood) narrows as a halving does, so this bounds
