@@ -161,8 +161,9 @@ def _sampled_peaks(scene: Scene, q: np.ndarray) -> np.ndarray:
 
 
 def _stop(scene: Scene, diag: dict) -> str:
-    """Why and where a run stopped early, in words ('event cap' or 'stall guard' first), with the unit's restitution
-    and gap: a unit of e = 1 in a gap of nanometres reaches the cap by its nature, not by a defect."""
+    """Why and where a run stopped early, in words ('event cap', 'event budget' or 'stall guard' first), with the
+    unit's restitution and gap: a unit of e = 1 in a gap of nanometres reaches the budget by its nature, not by a
+    defect."""
     if diag["stop_unit"] >= 0:
         _, damper = scene.unit_list()[diag["stop_unit"]]
         return (f"{diag['stopped_by']} at a {diag['stop_event']} of unit {diag['stop_unit']}: e = {damper.e:.2f}, "
@@ -174,9 +175,11 @@ def violations(scene: Scene, scale: float, result) -> list[str]:
     """Every promise the run broke: finished, finite, energy, penetration, no dense sample above a peak."""
     diag = result.diagnostics
     found = []
-    if diag["event_cap_reached"]:
+    stopped = diag["event_cap_reached"]
+    if stopped:
         found.append(_stop(scene, diag))
-    if not np.all(np.isfinite(result.final_q)) or not math.isfinite(result.peak_roof_displacement):
+    # a run stopped early reports its measures NaN, by design; its state stays finite
+    if not np.all(np.isfinite(result.final_q)) or not (stopped or math.isfinite(result.peak_roof_displacement)):
         found.append("non-finite result")
     if not abs(diag["energy_residual"]) <= ENERGY_TOL + SEGMENT_ROUNDOFF * diag["segments"]:
         found.append(f"energy residual {diag['energy_residual']:.2e}")

@@ -95,6 +95,7 @@ def test_amplitude_ratio_means_the_same_in_masri_and_run(capsys):
     (["sweep", "--out", "s.txt"], "must end in .nc"),
     (["sweep", "--out", "/nonexistent/dir/s.nc"], "does not exist"),
     (["quake", "--record", "no-such-record"], "fema-farfield:ID:a|b"),
+    (["quake", "--record", "elcentro", "--max-events", "5"], "argument --max-events: 5 is out of range"),
 ])
 def test_usage_errors_exit_2_naming_the_flag(argv, words, capsys):
     with pytest.raises(SystemExit) as exc:
@@ -142,6 +143,15 @@ def test_quake_tunes_a_tmd_for_the_building_unless_told(capsys):
 def _quake(capsys, *flags) -> dict:
     main(["quake", "--record", "elcentro", "--duration-s", "8", *flags])
     return json.loads(capsys.readouterr().out)
+
+
+def test_quake_stops_a_run_past_its_event_budget_and_says_why(capsys):
+    """Issue 42: an e = 1 CID in a nanometre gap, which would strike millions of times, stops at --max-events and
+    names the budget, the unit and the wall in its diagnostics."""
+    out = _quake(capsys, "--damper", "cid", "--gap-m", "1e-9", "--e", "1", "--max-events", "1000")
+    d = out["diagnostics"]
+    assert d["stopped_by"] == "event budget" and d["stop_unit"] == 0 and d["stop_event"] == "wall"
+    assert d["event_cap_reached"] and out["impacts"] == 1000
 
 
 def test_quake_takes_a_building_floor_by_floor(capsys):

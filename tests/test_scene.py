@@ -453,6 +453,53 @@ def test_a_run_the_event_cap_stops_names_the_unit_and_the_wall_it_stopped_at(thr
     assert done.diagnostics["stop_unit"] == -1 and done.diagnostics["stop_event"] == ""
 
 
+def test_a_run_past_its_event_budget_stops_flagged_and_one_within_it_runs_unchanged(three_storey, el_centro):
+    """Issue 42: an e = 1 unit in a gap of nanometres strikes about 1e5 times a second, and such runs took minutes
+    without a word.  Past its budget a run stops and names the unit and the wall it stopped at; a budget the run
+    stays within changes nothing of it, bit for bit."""
+    chatter = Damper("cid", 3000.0, gap=1e-8, e=1.0)
+    stopped = simulate_scene(Scene(three_storey, (chatter,), el_centro, max_events=20_000))
+    d = stopped.diagnostics
+    assert d["event_cap_reached"] and d["stopped_by"] == "event budget" and d["stop_unit"] == 0
+    assert d["stop_event"] == "wall" and d["impacts"] == pytest.approx(20_000, abs=10)
+    assert stopped.diagnostics["segments"] < 25_000 and math.isnan(stopped.peak_roof_displacement)
+
+    damper = Damper("cid", 3000.0, gap=0.001, e=0.5, units=2)
+    free = simulate_scene(Scene(three_storey, (damper,), el_centro, max_events=10**12))
+    within = simulate_scene(Scene(three_storey, (damper,), el_centro, max_events=free.diagnostics["segments"]))
+    assert within.diagnostics == free.diagnostics and within.diagnostics["stopped_by"] == ""
+    assert np.array_equal(within.final_q, free.final_q) and within.peak_drifts.tolist() == free.peak_drifts.tolist()
+    short = simulate_scene(Scene(three_storey, (damper,), el_centro, max_events=100))
+    assert short.diagnostics["stopped_by"] == "event budget"
+    assert short.diagnostics["stop_event"] in ("wall", "release")
+
+
+def test_the_docs_quote_the_default_event_budget():
+    """docs/usage.md and docs/model.md ("Guard") give the default budget, and model.md the shares of it of the
+    scenes it quotes (3 + 1, 9 + 12 and 6 + 11 degrees of freedom)."""
+    from pathlib import Path
+
+    from impact.model.scene import EVENT_BUDGET_PER_DOF
+
+    docs = Path(__file__).resolve().parents[1] / "docs"
+    for page in ("usage.md", "model.md"):
+        assert f"{EVENT_BUDGET_PER_DOF:,} over the" in " ".join((docs / page).read_text(encoding="utf-8").split())
+    model = " ".join((docs / "model.md").read_text(encoding="utf-8").split())
+    assert f"at their {EVENT_BUDGET_PER_DOF // 4:,} events" in model
+    assert f"at their {EVENT_BUDGET_PER_DOF // 21:,} after" in model and f"at its {EVENT_BUDGET_PER_DOF // 17:,} after" in model
+
+
+def test_a_scene_the_paper_loop_runs_keeps_its_event_budget():
+    """The dispatch sends a one-storey, one-unit harmonic scene to the paper loop, which keeps the scene's budget;
+    a scene built from the paper's protocol is bounded by the protocol (its cap per period over its periods) alone."""
+    from impact.engine.run import simulate as run_simulate
+
+    scene = paper_scene_from_system(System("cid", mu=0.1, beta=0.05, e=1.0, gap=1e-6), 1.0, Protocol(periods=40, average_from=20))
+    assert scene.max_events >= scene.max_events_per_period * 40
+    res = run_simulate(dataclasses.replace(scene, max_events=50), ("amplitude",))
+    assert res.loop == "paper" and res.diagnostics["stopped_by"] == "event budget" and res.impacts <= 51
+
+
 def test_undamped_resonance_and_bad_windows_are_refused():
     with pytest.raises(ValueError, match="undamped mode"):
         simulate_scene(Scene(Building.paper(0.0), (Damper("cid", 0.01, gap=0.2, e=0.5),), Harmonic(0.1, 1.0),

@@ -164,7 +164,8 @@ def main(argv=None) -> int:
     ap.add_argument("--scenes", type=int, default=3000, help="how many random scenes (default 3000)")
     ap.add_argument("--seed", type=int, default=None, help="the probe's seed (default: a fresh one, printed)")
     ap.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
-    ap.add_argument("--timeout", type=float, default=60.0, help="seconds one scene may run (default 60)")
+    ap.add_argument("--timeout", type=float, default=30.0,
+                    help="seconds one scene may run, on one core (default 30, issue 42's bound)")
     ap.add_argument("--yielding", type=float, default=YIELDING_SHARE,
                     help=f"share of the scenes on buildings that yield, 0 to 1 (default {YIELDING_SHARE})")
     ap.add_argument("--out", type=Path, default=Path("probe_scenes.json"), help="where the runs and classes go")

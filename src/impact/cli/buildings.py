@@ -125,7 +125,7 @@ def quake(args) -> dict:
         dampers = (_quake_damper(args, flags, building.total_mass),)
     load = GroundMotion.from_record(record, pga_g=args.pga_g)
     scene = Scene(building, dampers, load, duration=args.duration_s, start=flags.get("start", "centre"),
-                  collapse_drift_ratio=args.collapse_drift_ratio)
+                  collapse_drift_ratio=args.collapse_drift_ratio, max_events=args.max_events)
     if (args.plot or args.compare_bare) and not dampers:
         flag = "--plot draws a damper's strokes and impacts" if args.plot else "--compare-bare compares a damper"
         raise ParameterError(f"{flag}: give --damper {either(KINDS)}")

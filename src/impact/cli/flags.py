@@ -13,7 +13,7 @@ from impact import __version__
 from impact.closed_form.pushover import PATTERNS as PUSHOVER_PATTERNS
 from impact.model.kinds import CID, KINDS, DamperKind
 from impact.model.params import IMPACT_KINDS, MAX_TUNING, MIN_TUNING, STARTS
-from impact.model.scene import DAMPER_KINDS
+from impact.model.scene import DAMPER_KINDS, EVENT_BUDGET_PER_DOF
 
 #: what the parser says the command line is
 DESCRIPTION = "Command-line entry point `impact`: try a case without Snakemake."
@@ -228,6 +228,10 @@ def build_parser() -> argparse.ArgumentParser:
                     help=f"a CID's or PID's mass's initial place (default {QUAKE_DEFAULTS['start']})")
     qk.add_argument("--duration-s", type=_ranged(0, 1e6, lo_open=True), default=None,
                     help="simulated time in seconds (default: the record's length)")
+    qk.add_argument("--max-events", type=_ranged(10, 1e12, kind=int), default=None,
+                    help="the run's event budget: a run that would resolve more events (impacts, releases, yields) "
+                         "stops, flagged 'event budget' in its diagnostics, in [10, 1e12] (default "
+                         f"{EVENT_BUDGET_PER_DOF:,} over the storeys and damper units)")
     qk.add_argument("--plot", metavar="FILE", type=_new_file(*PLOT_SUFFIXES), default=None,
                     help=PLOT_HELP + "; with the bare building's roof")
     qk.add_argument("--compare-bare", action="store_true",

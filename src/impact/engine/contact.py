@@ -214,11 +214,11 @@ STALL_EVENTS, STALL_SPAN = 1000, 1e-9  # this many events within this fraction o
 
 @njit(cache=True, inline='always')
 def event_cap_reached(t, p, clock):
-    """Count the event in its period; layout.STOP_CAP past the cap, layout.STOP_STALL when STALL_EVENTS events in
-    a row took less than STALL_SPAN of a period (a loop that makes no progress: a bug, since chatter is resolved
-    by sticking), else 0.
+    """Count the event in its period and in the run; layout.STOP_CAP past the cap per period, layout.STOP_STALL
+    when STALL_EVENTS events in a row took less than STALL_SPAN of a period (a loop that makes no progress: a bug,
+    since chatter is resolved by sticking), layout.STOP_BUDGET past the run's event budget, else 0.
 
-    clock: the period index, its events so far, the time and count of the last stall check.
+    clock: the period index, its events so far, the time and count of the last stall check, the run's events.
     """
     pi_now = math.floor(t / p[L.P_PERIOD])
     if pi_now != clock[0]:
@@ -226,9 +226,12 @@ def event_cap_reached(t, p, clock):
         clock[1] = 0.0
     clock[1] += 1.0
     clock[3] += 1.0
+    clock[4] += 1.0
     if clock[3] >= STALL_EVENTS:
         if t - clock[2] < STALL_SPAN * p[L.P_PERIOD]:
             return L.STOP_STALL
         clock[2] = t
         clock[3] = 0.0
-    return L.STOP_CAP if clock[1] > p[L.P_MAXEV] else 0
+    if clock[1] > p[L.P_MAXEV]:
+        return L.STOP_CAP
+    return L.STOP_BUDGET if clock[4] > p[L.P_MAXEV_RUN] else 0

@@ -41,7 +41,7 @@ _DIAGNOSTIC_FIELDS = (
 )
 
 
-STOPPED_BY = {0: "", L.STOP_CAP: "event cap", L.STOP_STALL: "stall guard"}
+STOPPED_BY = {0: "", L.STOP_CAP: "event cap", L.STOP_STALL: "stall guard", L.STOP_BUDGET: "event budget"}
 
 
 def stop(diag) -> dict:

@@ -23,7 +23,8 @@ P_T0, P_TEND, P_TWIN, P_VSTICK, P_MAXEV, P_PERIOD = 0, 1, 2, 3, 4, 5
 P_OMEGA, P_PHI, P_F0 = 6, 7, 8          # harmonic load F0 sin(Omega t + phi)
 P_REC_T0, P_REC_DT = 9, 10              # record load: first sample time and step
 P_WINDOW = 11  # the scene loop: 1.0 integrates the roof's square over the window (amplitude, RMS), 0.0 not (unread)
-NPAR = 12
+P_MAXEV_RUN = 12  # the run's event budget, its events in all (inf: none but the cap per period)
+NPAR = 13
 # the paper loop's system, model units (M = 1, omega_n = 1): mass ratio, damping ratio, restitution, gap,
 # the pendulum's tuning wp (0 for the CID)
 P_MU, P_BETA, P_E, P_GAP, P_WP = range(NPAR, NPAR + 5)
@@ -37,11 +38,12 @@ D_FRICTION, D_SEGMENTS, D_SIMULTANEOUS, D_EMAX, D_PEAK_GAVE_UP = 15, 16, 17, 18,
 D_X2WIN = 20  # the paper loop's integral of x^2 over the window (its amplitude)
 # a yielding building's: the plastic work, the yield events, and whether a storey's drift passed its collapse limit
 D_PLASTIC, D_YIELDS, D_COLLAPSE = 21, 22, 23
-# a run stopped early (D_CAP: STOP_CAP or STOP_STALL): the element whose event it stopped at (a unit's index, or
+# a run stopped early (D_CAP: STOP_CAP, STOP_STALL or STOP_BUDGET): the element whose event it stopped at (a unit's index, or
 # a storey's for a storey's event), that event's kind (EV_*) and its side (+1 / -1, 0 for none)
 D_STOP_ELEMENT, D_STOP_EVENT, D_STOP_SIDE = 24, 25, 26
 NDIAG = 27
-STOP_CAP, STOP_STALL = 1, 2  # D_CAP: the cap on events per period, or the stall guard (no progress)
+# D_CAP: the cap on events per period, the stall guard (no progress), or the run's event budget
+STOP_CAP, STOP_STALL, STOP_BUDGET = 1, 2, 3
 
 # the events of the elements' table: a unit's (its walls, the end of a slide, the release from a wall, leaving the
 # floor it rests on) and a storey's (the yield surface, its drift turning, the collapse limit); their names

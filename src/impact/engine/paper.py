@@ -86,8 +86,9 @@ def param_vector(system: System, r: float, protocol: Protocol, t0: float = 0.0) 
 
 
 def run_parameters(system: System, r: float, t_end: float, t_window: float, max_events_per_period: int,
-                   t0: float = 0.0) -> np.ndarray:
-    """param_vector with the run's times given (a scene carries them, not a Protocol)."""
+                   t0: float = 0.0, max_events: float = math.inf) -> np.ndarray:
+    """param_vector with the run's times given (a scene carries them, not a Protocol).  max_events: the run's
+    event budget (a scene's; a protocol's run is bounded by its periods and its cap per period)."""
     p = np.zeros(L.NPAR_PAPER)
     p[L.P_MU] = system.mu
     p[L.P_BETA] = system.beta
@@ -101,6 +102,7 @@ def run_parameters(system: System, r: float, t_end: float, t_window: float, max_
     p[L.P_TEND] = t_end
     p[L.P_TWIN] = t_window
     p[L.P_MAXEV] = max_events_per_period
+    p[L.P_MAXEV_RUN] = max_events
     p[L.P_T0] = t0
     p[L.P_PERIOD] = 2.0 * math.pi  # the event cap counts per natural period
     return p

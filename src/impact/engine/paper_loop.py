@@ -534,7 +534,7 @@ def _advance(w, fric, a_f, t, tau):
 
 @njit(cache=True, inline='always')
 def _book_stop(diag, stop, ev_kind, mode, ev_side):
-    """Why and where the run stopped at the event cap or the stall guard (layout.D_STOP_*)."""
+    """Why and where the run stopped at an event cap or the stall guard (layout.D_STOP_*)."""
     diag[L.D_CAP] = stop
     diag[L.D_STOP_ELEMENT] = 0.0  # the one unit
     diag[L.D_STOP_EVENT] = _event_kind(ev_kind, mode)
@@ -679,7 +679,7 @@ def run(p, z_init, code_init, pid, fric, rec, diag, z_out):
     """
     rows = np.zeros((NROWS, NT), dtype=np.complex128)
     rows[W_POWERED, :] = np.nan
-    owners = (rows, np.zeros((5, NT)), np.zeros(NVEC), np.zeros(4), np.zeros(NCONTACT, dtype=np.int64))
+    owners = (rows, np.zeros((5, NT)), np.zeros(NVEC), np.zeros(5), np.zeros(NCONTACT, dtype=np.int64))
     return _loop(p, z_init, code_init, pid, fric, rec, diag, z_out, owners)
 
 
@@ -723,7 +723,7 @@ def _loop(p, z_init, code_init, pid, fric, rec, diag, z_out, owners):
         c[C_ESCAPE_V] = 0
         if ev[0] > tau_max:
             break
-        stop = event_cap_reached(t, p, clock)  # the cap on events per period, and the stall guard
+        stop = event_cap_reached(t, p, clock)  # the caps on events per period and per run, and the stall guard
         if stop != 0:
             _book_stop(diag, stop, ev_kind, c[C_MODE], ev[1])
             break

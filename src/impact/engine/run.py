@@ -76,7 +76,8 @@ def _run_paper(scene: Scene, measures: frozenset, record: int, times) -> SceneRe
     r = scene.load.omega
     paper.check_resonance(system, r)
     z0, code = paper.initial_state(system, scene.start)
-    p = paper.run_parameters(system, r, scene.t_end, scene.t_window, scene.max_events_per_period)
+    p = paper.run_parameters(system, r, scene.t_end, scene.t_window, scene.max_events_per_period,
+                             max_events=scene.event_budget)
     fric = np.array([system.nu * scene.gravity]) if system.nu > 0.0 else None
     paper.ensure_compiled(system.kind, fric is not None)
     diag = np.zeros(L.NDIAG)

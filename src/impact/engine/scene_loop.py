@@ -1361,7 +1361,7 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
     its = 0  # the next sample time
     while its < ts.shape[0] and ts[its] < t:
         its += 1
-    clock = np.array([math.floor(t / p[P_PERIOD]), 0.0, t, 0.0])
+    clock = np.array([math.floor(t / p[P_PERIOD]), 0.0, t, 0.0, 0.0])
     # what the slot, |kap|^n and the integral tables were last found for: scalars, not an array, so that
     # they stay in registers (an inlined helper returning them cost 15 % of a run)
     slot_key = -1

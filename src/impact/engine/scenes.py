@@ -278,6 +278,7 @@ def _scene_arrays(scene: Scene, peaks=PEAK_GROUPS, window: bool = True):
     p[L.P_TWIN] = scene.t_window
     p[L.P_WINDOW] = 1.0 if window else 0.0
     p[L.P_MAXEV] = scene.max_events_per_period
+    p[L.P_MAXEV_RUN] = scene.event_budget
     p[L.P_PERIOD] = 2.0 * math.pi / omega1
     if harm is not None:
         p[L.P_OMEGA] = scene.load.omega

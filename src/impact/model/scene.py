@@ -40,6 +40,12 @@ from impact.model.params import (
 #: at 7.4e-6 k a probe scene's energy balance lost 1.6e-7
 MIN_TANGENT = 1e-4
 
+#: a scene's event budget by default, over its degrees of freedom (storeys and units), since an event costs more
+#: the more there are: measured with e = 1 units in nanometre gaps, 16 to 20 µs an event on 3 storeys with one unit
+#: and 48 to 64 µs on 9 storeys with 12, so such a run ends in 5 to 10 s, the costliest the probe found in 27 s
+#: (docs/model.md, "Guard"); the study's runs make hundreds
+EVENT_BUDGET_PER_DOF = 2_000_000
+
 DAMPER_KINDS = damper_kinds()  # the registry's kinds (model.kinds), as the study lists them
 
 
@@ -195,6 +201,11 @@ class Scene:
         bounces every 3e-6 s, 1e6 events a period, all resolved.  A run that reaches it, or makes 1000 events
         within 1e-9 of a period (a loop without progress, which the engine guards against), ends flagged
         (event_cap_reached)
+    max_events
+        the run's event budget, its events in all (None: EVENT_BUDGET_PER_DOF over the storeys and units,
+        event_budget): a run that would resolve more (an e = 1 unit in a gap of nanometres, tens of millions of
+        impacts) ends flagged (event_cap_reached, stopped_by 'event budget') after this many, in seconds, not
+        minutes.  The study's record runs make hundreds; raise it to see such a run through
     collapse_drift_ratio
         a yielding building's run stops as a collapse once a storey's drift passes this fraction of its height
         (None: never; needs the building's storey heights)
@@ -210,6 +221,7 @@ class Scene:
     max_events_per_period: int = 2_000_000
     unit_starts: tuple | None = None
     collapse_drift_ratio: float | None = None
+    max_events: int | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "dampers", tuple(self.dampers))
@@ -234,6 +246,8 @@ class Scene:
             _check("window", self.window, 0.0, self.t_end, hi_open=True)
         _check("gravity", self.gravity, 0.0, 1e6, lo_open=True)
         check_integer("max_events_per_period", self.max_events_per_period, 10)
+        if self.max_events is not None:
+            check_integer("max_events", self.max_events, 10)
         if len(self.unit_list()) > 60:
             raise ParameterError("at most 60 damper units in one scene")
         if not self.building.is_elastic and len(self.unit_list()) + n > 62:
@@ -256,6 +270,13 @@ class Scene:
             half = 0.5 * d.gap if d.has_walls else 0.0
             _check(f"unit_starts[{k}]", x, -half, half)
         object.__setattr__(self, "unit_starts", starts)
+
+    @property
+    def event_budget(self) -> int:
+        """The events a run may resolve in all: max_events, or EVENT_BUDGET_PER_DOF over the degrees of freedom."""
+        if self.max_events is not None:
+            return self.max_events
+        return EVENT_BUDGET_PER_DOF // (self.building.storeys + len(self.unit_list()))
 
     @property
     def t_end(self) -> float:
@@ -315,9 +336,11 @@ def paper_scene(kind: str, mu: float, beta: float, e: float, gap: float, r: floa
     building = Building.paper(beta)
     damper = Damper(kind, mass=mu, gap=gap, e=e, tuning=rp if kind_of(kind).spring else 0.0, nu=nu, units=units)
     period = 2.0 * math.pi
+    # the protocol bounds a run by its periods and its cap per period, as the paper loop's own runs: no budget
+    budget = max_events_per_period * (math.ceil(periods) + 1)
     return Scene(building, (damper,), Harmonic(force_ratio, r, phase), duration=periods * period,
                  window=average_from * period, start=start, gravity=gravity,
-                 max_events_per_period=max_events_per_period)
+                 max_events_per_period=max_events_per_period, max_events=budget)
 
 
 def paper_scene_from_system(system, r: float, protocol, units: int = 1) -> Scene:
