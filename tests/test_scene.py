@@ -486,7 +486,8 @@ def test_the_docs_quote_the_default_event_budget():
         assert f"{EVENT_BUDGET_PER_DOF:,} over the" in " ".join((docs / page).read_text(encoding="utf-8").split())
     model = " ".join((docs / "model.md").read_text(encoding="utf-8").split())
     assert f"at their {EVENT_BUDGET_PER_DOF // 4:,} events" in model
-    assert f"at their {EVENT_BUDGET_PER_DOF // 21:,} after" in model and f"at its {EVENT_BUDGET_PER_DOF // 17:,} after" in model
+    assert f"at their {EVENT_BUDGET_PER_DOF // 21:,} after" in model
+    assert f"at its {EVENT_BUDGET_PER_DOF // 17:,} after" in model
 
 
 def test_a_scene_the_paper_loop_runs_keeps_its_event_budget():
@@ -494,7 +495,8 @@ def test_a_scene_the_paper_loop_runs_keeps_its_event_budget():
     a scene built from the paper's protocol is bounded by the protocol (its cap per period over its periods) alone."""
     from impact.engine.run import simulate as run_simulate
 
-    scene = paper_scene_from_system(System("cid", mu=0.1, beta=0.05, e=1.0, gap=1e-6), 1.0, Protocol(periods=40, average_from=20))
+    system = System("cid", mu=0.1, beta=0.05, e=1.0, gap=1e-6)
+    scene = paper_scene_from_system(system, 1.0, Protocol(periods=40, average_from=20))
     assert scene.max_events >= scene.max_events_per_period * 40
     res = run_simulate(dataclasses.replace(scene, max_events=50), ("amplitude",))
     assert res.loop == "paper" and res.diagnostics["stopped_by"] == "event budget" and res.impacts <= 51
