@@ -25,7 +25,8 @@ from pathlib import Path
 import numpy as np
 
 from impact.baselines.ivp import simulate_ivp
-from impact.engine.paper import simulate, sweep
+from impact.engine.run import simulate_system as simulate
+from impact.engine.run import sweep
 from impact.model.params import Protocol, System, frequency_grid
 from impact.outputs.provenance import package_versions
 

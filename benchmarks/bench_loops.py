@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-from impact.engine.paper import simulate
+from impact.engine.run import simulate_system as simulate
 from impact.engine.scenes import simulate_scene
 from impact.model.params import Protocol, System, frequency_grid
 from impact.model.scene import paper_scene_from_system

@@ -35,7 +35,7 @@ import numpy as np
 from numba import njit
 
 from impact.closed_form.propagator import first_order_hold
-from impact.engine.paper import simulate
+from impact.engine.run import simulate_system as simulate
 from impact.engine.scenes import PEAK_GROUPS, simulate_scene
 from impact.model.building import Building
 from impact.model.params import Protocol, System

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from impact.engine.paper import simulate, sweep
+from impact.engine.run import simulate_system as simulate
+from impact.engine.run import sweep
 from impact.model.params import Protocol, System
 from impact.stages.coexistence import count_attractors, ensemble_members, member_state, run_ensemble
 
@@ -27,7 +28,7 @@ def test_continuation_carries_the_state_and_the_force_phase():
     first = up.runs[0]
     # the second frequency starts where the first ended, with a continuous force
     second = simulate(system.__class__(**{**system.as_dict(), "phase": np.remainder(0.98 * SHORT.t_end + np.pi, 2 * np.pi) - np.pi}),
-                      1.0, SHORT, state=first.final_state, contact=first.final_contact)
+                      1.0, SHORT, initial=first.final)
     assert up.runs[1].amplitude == pytest.approx(second.amplitude, rel=1e-12)
     assert up.runs[1].amplitude != simulate(system, 1.0, SHORT).amplitude
 
@@ -71,8 +72,8 @@ def test_ensemble_is_deterministic():
     assert list(a["place"][:3]) == [0.0, -1.0, 1.0]  # the protocol's starts are members
     system = System.from_gap_ratio("cid", gap_ratio=1.6, **PAPER)
     for _, member in a.iterrows():
-        state, _ = member_state(system, member)
-        assert abs(state[2] - state[0]) <= 0.5 * system.gap + 1e-12  # inside the clearance
+        state = member_state(system, member)
+        assert abs(state.q[1] - state.q[0]) <= 0.5 * system.gap + 1e-12  # inside the clearance
 
 
 def test_ensemble_finds_coexisting_attractors_where_the_starts_differ():

@@ -3,14 +3,18 @@
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 from reference import one_body_amplitude, oscillator, rms_amplitude
 from scipy.optimize import brentq
 
-from impact.engine.paper import simulate, sweep
+from impact.engine import layout, paper, paper_loop
+from impact.engine.run import simulate_system as simulate
+from impact.engine.run import sweep
 from impact.model.params import ParameterError, Protocol, System, frequency_grid
+from impact.model.scene import State
 
 PAPER = dict(mu=0.01, beta=0.0048, e=0.25)
 
@@ -94,12 +98,25 @@ def test_zero_gap_is_one_mass(kind, r):
     assert np.isfinite(res.amplitude) and res.diagnostics["impacts"] == 0
 
 
+def _paper_loop_amplitude(system, r: float, protocol: Protocol = Protocol()) -> float:
+    """The paper loop called directly, below the dispatch and the System's ranges: a test of the loop itself."""
+    diag = np.zeros(layout.NDIAG)
+    z0, code = paper.initial_state(system, protocol.start)
+    paper.ensure_compiled(system.kind)
+    paper_loop.run(paper.param_vector(system, r, protocol), z0, code, paper.pid_data(system, r), None,
+                   np.zeros((0, layout.NREC)), diag, np.zeros(4))
+    return paper.window_amplitude(diag, protocol.t_window)[0]
+
+
 def test_pid_tends_to_cid_as_the_pendulum_softens():
+    """The paper loop's PID with a pendulum far softer than any scene's (MIN_TUNING) is the CID in the limit."""
     cid_amp = simulate(cid(1.0), 1.0).amplitude
+    assert _paper_loop_amplitude(cid(1.0), 1.0) == cid_amp  # through the dispatch or not: the same bits
     diffs = []
+    base = System.from_gap_ratio("pid", gap_ratio=1.0, rp=1.0, **PAPER)
     for rp in (1e-2, 1e-3):
-        pid = System.from_gap_ratio("pid", gap_ratio=1.0, rp=rp, **PAPER)
-        diffs.append(abs(simulate(pid, 1.0).amplitude - cid_amp) / cid_amp)
+        pid = SimpleNamespace(**{**base.as_dict(), "rp": rp})  # below the System's range, for the loop alone
+        diffs.append(abs(_paper_loop_amplitude(pid, 1.0) - cid_amp) / cid_amp)
     assert diffs[1] <= 1e-6
     # the difference is the pendulum force, O(r'^2): it shrinks ~100x per decade
     assert diffs[1] < diffs[0] / 30
@@ -129,7 +146,7 @@ def test_brief_double_touch_inside_one_naive_step_is_caught():
     t_ref = brentq(s, t[over[0] - 1], t[over[0]], xtol=1e-15, rtol=1e-15)
     naive = s(np.arange(0.0, 2 * np.pi, 2 * np.pi / 64))  # 64 steps per period
     assert np.all(naive < 0)  # a sign check at step ends misses it
-    res = simulate(system, r, Protocol(periods=1.0, average_from=0.5), record=10, state=z0)
+    res = simulate(system, r, Protocol(periods=1.0, average_from=0.5), record=10, initial=State.paper(z0))
     assert res.records["t"][0] == pytest.approx(t_ref, rel=1e-12, abs=1e-12)
     assert res.records["side"][0] == 1
 
@@ -186,9 +203,9 @@ def test_refuses_bad_parameters():
         cid(-1.0)
     with pytest.raises(ParameterError, match="kind"):
         System("tmd", gap=1.0, **PAPER)
-    # a PID's r' up to a scene's MAX_TUNING, named as the paper names it
-    for rp in (0.0, 500.0):
-        with pytest.raises(ParameterError, match=rf"^rp = {rp!r} is out of range: allowed \(0.0, 100.0\]"):
+    # a PID's r' in a scene's range, MIN_TUNING to MAX_TUNING, named as the paper names it
+    for rp in (0.0, 0.05, 500.0):
+        with pytest.raises(ParameterError, match=rf"^rp = {rp!r} is out of range: allowed \[0.1, 100.0\]"):
             System("pid", gap=1.0, rp=rp, **PAPER)
     with pytest.raises(ValueError, match="undamped resonance"):
         simulate(System("cid", mu=0.01, beta=0.0, e=0.5, gap=1.0), 1.0)

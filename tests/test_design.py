@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from impact.cli import main
-from impact.engine.paper import sweep
+from impact.engine.run import sweep
 from impact.model.params import Protocol, System, curve_id
 from impact.outputs.files import write_dataset
 from impact.stages.curves import curve_specs

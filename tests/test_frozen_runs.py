@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from impact.engine.paper import simulate
+from impact.engine.run import simulate_system as simulate
 from impact.model.params import Protocol, System
 
 FROZEN = json.loads((Path(__file__).parent / "data" / "frozen_runs.json").read_text())["cases"]

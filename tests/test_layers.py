@@ -94,6 +94,32 @@ def test_imports_go_down_the_layers(path):
     assert not upward, f"{path.relative_to(ROOT)} ({_part(path)}) imports above its layer: {upward}"
 
 
+#: the engine's ways in for the parts above it: the entry point (run: simulate for scenes, simulate_system and
+#: sweep for the paper's system on it) and Sa on a one-storey scene (spectra, itself a run.simulate)
+ENGINE_ENTRIES = {"impact.engine.run", "impact.engine.spectra"}
+#: what reaches the engine's insides, and why (docs/architecture.md, "The engine's two loops and its one entry
+#: point"): the compile command compiles the loops; the rig takes the engine's compile lock; the validation's
+#: model samples the paper loop densely between its events, which the dispatch does not offer on that loop
+ENGINE_INSIDE = {"cli/upkeep.py", "rig/simulator.py", "stages/validation/paper_model.py"}
+
+
+def test_the_stages_and_the_command_line_come_into_the_engine_through_its_entry_point():
+    """No stage, command or output runs a loop around the dispatch (engine.run.LOOPS): they import the engine's
+    entry modules only, except the few named, each with its reason."""
+    around = {}
+    for path in _library_modules():
+        rel = str(path.relative_to(PACKAGE))
+        if _part(path) not in ("stages", "cli", "outputs", "rig") or rel in ENGINE_INSIDE:
+            continue
+        inside = {name for _, name in _imports(path) if name.startswith("impact.engine.")
+                  and not any(name == e or name.startswith(e + ".") for e in ENGINE_ENTRIES)}
+        # "from impact.engine.run import x" also yields "impact.engine.run.x"; a bare "from impact.engine import
+        # run" yields "impact.engine.run"
+        if inside:
+            around[rel] = sorted(inside)
+    assert not around, f"around the engine's entry point: {around}"
+
+
 def test_the_layer_check_catches_every_form_of_an_upward_import(tmp_path):
     """On a synthetic package: absolute, from-, relative and function-level imports upwards are all found,
     and imports down the layers or of the module's own part are not."""

@@ -13,7 +13,7 @@ from reference import oscillator, rms_amplitude
 from scipy.optimize import minimize_scalar
 
 from impact.closed_form.masri import masri_2eipc, orbit_rms_amplitude
-from impact.engine.paper import sweep
+from impact.engine.run import sweep
 from impact.model.params import Protocol, System
 from impact.stages.readings import orbit_window_amplitude, refine_peak
 from impact.stages.sweeps import run_curve

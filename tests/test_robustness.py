@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from impact.engine.paper import sweep
+from impact.engine.run import sweep
 from impact.model.params import Protocol, System
 from impact.stages.robustness.designs import Conditions, Design, designs_from_study, stroke_cap
 from impact.stages.robustness.runs import design_dataset, multi_unit, peak_response, scene_peak_response

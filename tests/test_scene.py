@@ -16,12 +16,12 @@ import pytest
 from reference import HANG_GUARD_S
 from scipy import signal
 
-from impact.engine.paper import simulate
+from impact.engine.run import simulate_system as simulate
 from impact.engine.scenes import amplitude, simulate_scene
 from impact.model.building import Building
 from impact.model.params import ParameterError, Protocol, System
 from impact.model.records import REAL_RECORDS, RecordError, load_record, parse_at2, read_at2
-from impact.model.scene import Damper, ForceRecord, GroundMotion, Harmonic, Scene, paper_scene_from_system
+from impact.model.scene import Damper, ForceRecord, GroundMotion, Harmonic, Scene, State, paper_scene_from_system
 
 PAPER = dict(mu=0.01, beta=0.0048, e=0.25)
 
@@ -78,7 +78,7 @@ def test_sensitive_cases_agree_until_round_off_grows(case):
     assert len(old.records["t"]) > k and len(new.records["t"]) > k
     np.testing.assert_allclose(new.records["t"][:k], old.records["t"][:k], rtol=1e-12)
     np.testing.assert_allclose(new.records["w_plus"][:k], old.records["w_plus"][:k], rtol=1e-9, atol=1e-12)
-    nudged = simulate(system, r, Protocol(), state=np.array([1e-15, 0, 0, 0]), contact=0)
+    nudged = simulate(system, r, Protocol(), initial=State.paper((1e-15, 0, 0, 0)))
     assert abs(nudged.amplitude / simulate(system, r).amplitude - 1) > 1e-6  # the long run is round-off driven
 
 

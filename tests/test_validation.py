@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from impact.engine.paper import simulate
+from impact.engine.run import simulate_system as simulate
 from impact.model.params import Protocol
 from impact.outputs.measurements import load_measurements
 from impact.outputs.signals import sweep_curve

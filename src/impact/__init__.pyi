@@ -5,9 +5,11 @@ from .engine import RunResult as RunResult
 from .engine import SceneResult as SceneResult
 from .engine import SweepResult as SweepResult
 from .engine import simulate as simulate
+from .engine import simulate_system as simulate_system
 from .engine import spectral_acceleration as spectral_acceleration
 from .engine import sweep as sweep
 from .model import Building as Building
+from .model import Contact as Contact
 from .model import Damper as Damper
 from .model import ForceRecord as ForceRecord
 from .model import GroundMotion as GroundMotion
@@ -17,6 +19,7 @@ from .model import Protocol as Protocol
 from .model import Record as Record
 from .model import RecordError as RecordError
 from .model import Scene as Scene
+from .model import State as State
 from .model import System as System
 from .model import kanai_tajimi as kanai_tajimi
 from .model import load_record as load_record

@@ -8,8 +8,7 @@ import sys
 
 from impact.cli.time_history import asked, plot
 from impact.closed_form.masri import masri_2eipc
-from impact.engine.paper import sweep
-from impact.engine.run import simulate
+from impact.engine.run import simulate, sweep
 from impact.model.kinds import KINDS, either, kinds_with
 from impact.model.params import ParameterError, Protocol, System, a_max, frequency_grid, ipc_label
 from impact.model.scene import paper_scene_from_system

@@ -20,13 +20,14 @@ By concern:
 - :mod:`.sampler`      dense output: the state at requested times
 - :mod:`.diagnostics`  a run's diagnostics as named numbers and its energy balance
 - :mod:`.jitcache`     numba's on-disk cache kept honest, and the compile lock
-- :mod:`.paper`        runs and sweeps of the paper's system (:class:`impact.model.params.System`)
+- :mod:`.paper`        the paper loop's side of the paper's system (:class:`impact.model.params.System`)
 - :mod:`.scenes`       runs of scenes (:class:`impact.model.scene.Scene`) on the scene loop
-- :mod:`.run`          the one entry point, :func:`.run.simulate`: its table LOOPS picks the loop a scene needs
+- :mod:`.run`          the one entry point, :func:`.run.simulate`: its table LOOPS picks the loop a scene needs;
+                       :func:`.run.simulate_system` and :func:`.run.sweep` run the paper's system through it
 
 See ``docs/architecture.md`` for where the engine sits and ``docs/model.md`` for what it solves.
 
-The public names (:func:`simulate`, :func:`sweep`, the result types, :func:`spectral_acceleration`) load on first use (``__init__.pyi`` lists them): importing one module of the engine does not import the rest.
+The public names (:func:`simulate`, :func:`simulate_system`, :func:`sweep`, the result types, :func:`spectral_acceleration`) load on first use (``__init__.pyi`` lists them): importing one module of the engine does not import the rest.
 """
 
 import lazy_loader

@@ -61,8 +61,9 @@ SceneArrays = namedtuple("SceneArrays", "p building units load_vec monitors")
 StartState = namedtuple("StartState", "q v mode side")
 
 #: what a run writes: impact records (layout.R_*), diagnostics (layout.D_*), final state, each monitor's
-#: peak, its time and the window's square integral, and the dense output at the times ts
-RunOutputs = namedtuple("RunOutputs", "recs diag q v peak peak_t x2 ts samples")
+#: peak, its time and the window's square integral, the dense output at the times ts, and every unit's final
+#: contact state (a row of mode, wall side and slide sign)
+RunOutputs = namedtuple("RunOutputs", "recs diag q v peak peak_t x2 ts samples contact")
 
 #: the state the loop advances: every unit's contact state (mode, wall side, slide sign, offset from its
 #: floor, escape flags of the event searches, what settle checks), positions and velocities

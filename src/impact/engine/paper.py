@@ -1,26 +1,24 @@
-"""Runs and frequency sweeps of the CID and PID with the exact event-driven core.
+"""The paper loop's side of the paper's system (:class:`impact.model.params.System`): its compile, its
+parameter vector, the PID's eigen-data, the protocol's rest starts and the window's amplitude.
 
-`simulate` follows the paper's response protocol (model.md): start from rest
-(damper mass centred or at a wall), simulate `periods` natural periods, and
-measure the amplitude as sqrt(2) * RMS of x over the window from
-`average_from` periods on, integrated exactly from the piecewise closed form.
+Runs and sweeps under the paper's response protocol (model.md: start from rest, the damper mass centred or at
+a wall, simulate `periods` natural periods, the amplitude sqrt(2) RMS of x over the window from `average_from`
+periods on) are :func:`impact.engine.run.simulate_system` and :func:`impact.engine.run.sweep`, which build a
+Scene and send it through the engine's dispatch; the dispatch runs it here (``run._run_paper``).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from impact.engine import layout as L
 from impact.engine import paper_loop as K
 from impact.engine.contact import STICK_VELOCITY
-from impact.engine.diagnostics import read_diagnostics
 from impact.engine.jitcache import compile_lock
 from impact.model.kinds import KINDS
-from impact.model.params import Protocol, System, ipc_class, ipc_label
+from impact.model.params import Protocol, System
 
 _WARM: set = set()
 FREE_FLIGHT = K.contact_code(L.MODE_FREE, 0, 0)
@@ -35,7 +33,10 @@ def ensure_compiled(kind: str, friction: bool = False) -> None:
     with compile_lock(f"paper-{kind}-{int(friction)}", label, fresh=(K.run,)):
         probe = System(kind, mu=0.01, beta=0.05, e=0.5, gap=1.0, rp=1.0 if KINDS[kind].spring else 0.0,
                        nu=0.1 if friction else 0.0)
-        _run_kernel(probe, 0.9, Protocol(periods=1.0, average_from=0.5), np.zeros(4), FREE_FLIGHT, 1)
+        p = param_vector(probe, 0.9, Protocol(periods=1.0, average_from=0.5))
+        fric = np.array([probe.friction_accel]) if friction else None
+        K.run(p, np.zeros(4), FREE_FLIGHT, pid_data(probe, 0.9), fric, np.zeros((1, L.NREC)), np.zeros(L.NDIAG),
+              np.zeros(4))
     _WARM.add(key)
 
 
@@ -108,161 +109,9 @@ def run_parameters(system: System, r: float, t_end: float, t_window: float, max_
     return p
 
 
-@dataclass
-class RunResult:
-    """One run under the response protocol (model units)."""
-
-    r: float
-    amplitude: float
-    amplitude_ratio: float
-    aipc: float
-    ipc_class: int
-    diagnostics: dict
-    final_state: np.ndarray
-    final_contact: int
-    records: dict | None = field(default=None, repr=False)
-
-    def as_json(self) -> dict:
-        out = {
-            "r": self.r,
-            "amplitude": self.amplitude,
-            "amplitude_ratio": self.amplitude_ratio,
-            "aipc": self.aipc,
-            "ipc_class": ipc_label(self.aipc),
-            "diagnostics": self.diagnostics,
-        }
-        return out
-
-
-def simulate(system: System, r: float, protocol: Protocol = Protocol(), *, record: int = 0,
-             state=None, contact=None, t0: float = 0.0) -> RunResult:
-    """One run at frequency ratio r.
-
-    record: keep up to this many impact records (t, side, x, v-, y'-, v+, y'+, stuck).
-    state/contact: start from a given (x, x', y, y') and contact code instead of
-    the protocol's rest state (continuation sweeps, closed-form orbits).
-    """
-    check_resonance(system, r)
-    if state is None:
-        z0, code = initial_state(system, protocol.start)
-    else:
-        z0 = np.asarray(state, dtype=float)
-        code = FREE_FLIGHT if contact is None else int(contact)
-    ensure_compiled(system.kind, system.nu > 0.0)
-    return _run_kernel(system, r, protocol, z0, code, record, t0)
-
-
-def friction_data(system: System):
-    """(a_f,) in model units, or None: a frictionless run never compiles the friction path."""
-    return np.array([system.friction_accel]) if system.nu > 0.0 else None
-
-
-def _run_kernel(system, r, protocol, z0, code, record, t0=0.0) -> "RunResult":
-    p = param_vector(system, r, protocol, t0)
-    rec = np.zeros((int(record), L.NREC))
-    diag = np.zeros(L.NDIAG)
-    z_out = np.zeros(4)
-    final = K.run(p, np.asarray(z0, dtype=float), int(code), pid_data(system, r), friction_data(system),
-                  rec, diag, z_out)
-    return _result(system, r, protocol, diag, z_out, final, rec)
-
-
 def window_amplitude(diag, t_window: float) -> tuple[float, float, bool]:
     """(amplitude sqrt(2) RMS of x over the window, the window's span, whether the run completed it) from a
     paper-loop run's diagnostics: the one place this is computed, so every caller gets the same bits."""
     span = diag[L.D_TEND] - t_window
     complete = bool(not diag[L.D_CAP] and span > 0)
     return (math.sqrt(2.0 * diag[L.D_X2WIN] / span) if complete else math.nan), span, complete
-
-
-def _result(system, r, protocol, diag, z_out, final, rec) -> RunResult:
-    amp, span, complete = window_amplitude(diag, protocol.t_window)
-    cycles = span * r / (2.0 * math.pi)
-    aipc = diag[L.D_IMPACTS_WIN] / cycles if complete else math.nan
-    records = None
-    if rec.shape[0]:
-        n = int(diag[L.D_NREC])
-        records = {c: rec[:n, i].copy() for i, c in enumerate(L.RECORD_COLUMNS)}
-    amax = system.a_max
-    return RunResult(
-        r=float(r),
-        amplitude=amp,
-        amplitude_ratio=amp / amax if math.isfinite(amax) else math.nan,
-        aipc=aipc,
-        ipc_class=ipc_class(aipc),
-        diagnostics=read_diagnostics(diag),
-        final_state=z_out.copy(),
-        final_contact=int(final),
-        records=records,
-    )
-
-
-@dataclass
-class SweepResult:
-    """A frequency sweep under the protocol: per-r results and the paper's x_max, X_m."""
-
-    r: np.ndarray
-    runs: list
-
-    def column(self, name: str) -> np.ndarray:
-        if name in ("amplitude", "amplitude_ratio", "aipc", "ipc_class"):
-            return np.array([getattr(run, name) for run in self.runs])
-        return np.array([run.diagnostics[name] for run in self.runs])
-
-    @property
-    def x_max(self) -> float:
-        amp = self.column("amplitude")
-        return float(np.max(amp)) if np.all(np.isfinite(amp)) else math.nan
-
-    @property
-    def r_at_max(self) -> float:
-        amp = self.column("amplitude")
-        return float(self.r[int(np.nanargmax(amp))]) if np.any(np.isfinite(amp)) else math.nan
-
-
-SWEEP_MODES = ("from_rest", "continuation_up", "continuation_down")
-
-
-def _progress(values, show: bool):
-    """values, with a progress bar on stderr when asked and stderr is a terminal (tqdm: silent otherwise)."""
-    if not show:
-        return values
-    from tqdm import tqdm
-
-    return tqdm(values, desc="frequencies", unit="run", leave=False, disable=None)
-
-
-def sweep(system: System, r_values, protocol: Protocol = Protocol(), mode: str = "from_rest",
-          state=None, contact=None, progress: bool = False) -> SweepResult:
-    """Frequency sweep under the protocol.
-
-    from_rest: every frequency starts afresh from the protocol's start (or from
-    `state`/`contact` when given: one initial condition for every frequency).
-    continuation_up / _down: frequencies in increasing / decreasing order, each
-    starting from the final state of the previous one, as a slow physical
-    sweep would; the force stays continuous (its phase carries over).  Each
-    frequency still runs the protocol's periods and window, so the first
-    average_from periods settle the new frequency.  Results are in the order
-    of r_values either way.  progress: a progress bar on stderr when it is a terminal (tqdm).
-    """
-    if mode not in SWEEP_MODES:
-        raise ValueError(f"sweep mode {mode!r} is not one of {', '.join(SWEEP_MODES)}")
-    r_values = np.asarray(r_values, dtype=float)
-    if mode == "from_rest":
-        runs = [simulate(system, float(r), protocol, state=state, contact=contact)
-                for r in _progress(r_values, progress)]
-        return SweepResult(r=r_values, runs=runs)
-    order = np.argsort(r_values, kind="stable")
-    if mode == "continuation_down":
-        order = order[::-1]
-    runs = [None] * len(r_values)
-    current, z, code = system, state, contact
-    for i in _progress(order, progress):
-        r = float(r_values[i])
-        run = simulate(current, r, protocol, state=z, contact=code)
-        runs[i] = run
-        z, code = run.final_state, run.final_contact
-        # the force phase at the end of this run is the next run's phase at t = 0
-        end_phase = math.remainder(r * protocol.t_end + current.phase, 2.0 * math.pi)
-        current = dataclasses.replace(current, phase=end_phase)
-    return SweepResult(r=r_values, runs=runs)

@@ -2,6 +2,12 @@
 
     result = simulate(scene)                                  # amplitude, impacts, diagnostics
     result = simulate(scene, measures=("amplitude", "peaks"))  # and the certified peaks
+    run = simulate_system(system, r, protocol)                # the paper's system under its protocol
+    runs = sweep(system, r_values, protocol, mode="continuation_up")
+
+``simulate_system`` and ``sweep`` speak the paper's language (a :class:`~impact.model.params.System` in model
+units, a frequency ratio, the response :class:`~impact.model.params.Protocol`): each run is a Scene that
+``simulate`` dispatches, so the paper's study takes the same way in as every scene.
 
 :data:`LOOPS` is the dispatch table, tried in order: the first loop that can run the scene and
 measure what is asked runs it.  The paper loop (:mod:`.paper_loop`) runs the paper's one-storey,
@@ -12,8 +18,10 @@ what a loop does not measure is NaN there, and ``result.loop`` names the loop th
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
@@ -22,23 +30,24 @@ from impact.engine import layout as L
 from impact.engine import paper
 from impact.engine import paper_loop as K
 from impact.engine.diagnostics import read_diagnostics
-from impact.engine.scenes import PEAK_GROUPS, SceneResult, simulate_scene
-from impact.model.params import ParameterError, System
-from impact.model.scene import Harmonic, Scene
+from impact.engine.scenes import MODE_CODES, PEAK_GROUPS, SceneResult, contacts_of, simulate_scene
+from impact.model.params import ParameterError, Protocol, System, ipc_class, ipc_label
+from impact.model.scene import Harmonic, Scene, State, paper_scene_from_system
 
 #: what a run can measure: the window's amplitude (sqrt 2 RMS of the roof), the impacts and diagnostics
 #: with the final state, the certified peaks of every monitor (roof, drifts, strokes) or of the drifts or the
 #: strokes alone, impact records and the state at requested times
 MEASURES = ("amplitude", "impacts", "peaks", "drifts", "strokes", "records", "samples")
 DEFAULT_MEASURES = ("amplitude", "impacts")
-PAPER_MEASURES = frozenset(("amplitude", "impacts"))
+PAPER_MEASURES = frozenset(("amplitude", "impacts", "records"))
 
 
 @dataclass(frozen=True)
 class Loop:
-    """A loop of the engine: whether it runs a scene with these measures, and the run."""
+    """A loop of the engine: its plan for a scene with these measures (None when it cannot run it; what the run
+    needs of the scene otherwise, worked out once), and the run, given the plan."""
 
-    fits: Callable[[Scene, frozenset], bool]
+    plan: Callable[[Scene, frozenset], object]
     run: Callable[..., SceneResult]
 
 
@@ -46,8 +55,8 @@ def as_paper_system(scene: Scene) -> System | None:
     """The scene as the paper loop's System, when it is the paper's case in model units; None otherwise.
 
     The paper's case: one storey of mass 1 and stiffness 1 (omega = 1, time in radians of the structure),
-    one CID or undamped PID unit, a harmonic force on that storey, every unit starting at rest in the
-    centre or on a wall.  Every number is taken as the scene holds it, so a scene built by
+    one CID or undamped PID unit, a harmonic force on that storey, the unit starting at rest in the centre
+    or on a wall, or from a given State (Scene.initial).  Every number is taken as the scene holds it, so a scene built by
     :func:`impact.model.scene.paper_scene_from_system` runs exactly the System it was built from.
     """
     b = scene.building
@@ -63,26 +72,47 @@ def as_paper_system(scene: Scene) -> System | None:
         return None
     if b.damping[0, 0] != 2.0 * b.zeta:
         return None  # the paper's damping is C = 2 beta
-    return System(d.kind, mu=d.mass, beta=b.zeta, e=d.e, gap=d.gap, rp=d.tuning if d.kind_spec.spring else 0.0,
-                  force_ratio=load.amplitude, phase=load.phase, nu=d.nu)
+    return _system(d.kind, d.mass, b.zeta, d.e, d.gap, d.tuning if d.kind_spec.spring else 0.0, load.amplitude,
+                   load.phase, d.nu)
 
 
-def _paper_fits(scene: Scene, measures: frozenset) -> bool:
-    return measures <= PAPER_MEASURES and as_paper_system(scene) is not None
+@functools.lru_cache(maxsize=256)
+def _system(kind: str, mu: float, beta: float, e: float, gap: float, rp: float, force_ratio: float, phase: float,
+            nu: float) -> System:
+    """The System of these numbers, checked once: a sweep from rest runs one System at every frequency."""
+    return System(kind, mu=mu, beta=beta, e=e, gap=gap, rp=rp, force_ratio=force_ratio, phase=phase, nu=nu)
 
 
-def _run_paper(scene: Scene, measures: frozenset, record: int, times) -> SceneResult:
-    system = as_paper_system(scene)
+def _paper_plan(scene: Scene, measures: frozenset) -> System | None:
+    """The scene's System, when the paper loop measures what is asked and the scene is the paper's case."""
+    return as_paper_system(scene) if measures <= PAPER_MEASURES else None
+
+
+def _paper_start(system: System, scene: Scene) -> tuple[np.ndarray, int]:
+    """The paper loop's (x, x', y, y') and contact code where the scene starts."""
+    if scene.initial is None:
+        return paper.initial_state(system, scene.start)
+    (x, y), (xd, yd), (c,) = scene.initial.q, scene.initial.v, scene.initial.contacts
+    return np.array([x, xd, y, yd]), K.contact_code(MODE_CODES[c.mode], c.side, c.slide)
+
+
+def _paper_contact(code: int) -> tuple:
+    """The unit's Contact from the paper loop's code (paper_loop.contact_code)."""
+    return contacts_of([(code % 10, (code % 100) // 10 - 1, code // 100 - 1)])
+
+
+def _run_paper(scene: Scene, system: System, measures: frozenset, record: int, times) -> SceneResult:
     r = scene.load.omega
     paper.check_resonance(system, r)
-    z0, code = paper.initial_state(system, scene.start)
+    z0, code = _paper_start(system, scene)
     p = paper.run_parameters(system, r, scene.t_end, scene.t_window, scene.max_events_per_period,
                              max_events=scene.event_budget)
     fric = np.array([system.nu * scene.gravity]) if system.nu > 0.0 else None
     paper.ensure_compiled(system.kind, fric is not None)
     diag = np.zeros(L.NDIAG)
     z_out = np.zeros(4)
-    K.run(p, z0, int(code), paper.pid_data(system, r), fric, np.zeros((0, L.NREC)), diag, z_out)
+    rec = np.zeros((int(record), L.NREC))
+    final = K.run(p, z0, int(code), paper.pid_data(system, r), fric, rec, diag, z_out)
     amp, span, complete = paper.window_amplitude(diag, scene.t_window)
     nan = math.nan
     return SceneResult(
@@ -90,11 +120,19 @@ def _run_paper(scene: Scene, measures: frozenset, record: int, times) -> SceneRe
         rms_roof_displacement=math.sqrt(diag[L.D_X2WIN] / span) if complete else nan,
         peak_roof_acceleration=nan, peak_interstorey_drift=nan, peak_drifts=np.full(1, nan),
         peak_strokes=np.full(1, nan), impacts=int(diag[L.D_IMPACTS]), diagnostics=read_diagnostics(diag),
-        final_q=z_out[[0, 2]].copy(), final_v=z_out[[1, 3]].copy(), amplitude=amp, window_span=float(span),
-        loop="paper")
+        final_q=z_out[[0, 2]].copy(), final_v=z_out[[1, 3]].copy(), records=_records(rec, diag),
+        amplitude=amp, window_span=float(span), loop="paper", final_contacts=_paper_contact(int(final)))
 
 
-def _run_scene(scene: Scene, measures: frozenset, record: int, times) -> SceneResult:
+def _records(rec: np.ndarray, diag: np.ndarray) -> dict | None:
+    """The impact records a loop wrote (layout.RECORD_COLUMNS), or None when none were asked."""
+    if not rec.shape[0]:
+        return None
+    n = int(diag[L.D_NREC])
+    return {c: rec[:n, i].copy() for i, c in enumerate(L.RECORD_COLUMNS)}
+
+
+def _run_scene(scene: Scene, plan, measures: frozenset, record: int, times) -> SceneResult:
     return simulate_scene(scene, record=record, times=times, peaks=peak_groups(measures), window=has_window(measures))
 
 
@@ -112,7 +150,7 @@ def peak_groups(measures: frozenset) -> tuple:
 
 
 #: the loops, tried in order (the fast special case first)
-LOOPS = {"paper": Loop(_paper_fits, _run_paper), "scene": Loop(lambda scene, measures: True, _run_scene)}
+LOOPS = {"paper": Loop(_paper_plan, _run_paper), "scene": Loop(lambda scene, measures: True, _run_scene)}
 
 
 def simulate(scene: Scene, measures=DEFAULT_MEASURES, *, record: int = 0, times=None) -> SceneResult:
@@ -134,6 +172,132 @@ def simulate(scene: Scene, measures=DEFAULT_MEASURES, *, record: int = 0, times=
     if (record and "records" not in asked) or (times is not None and "samples" not in asked):
         raise ParameterError("record and times come with the measures 'records' and 'samples'")
     for loop in LOOPS.values():
-        if loop.fits(scene, asked):
-            return loop.run(scene, asked, record, times)
-    raise AssertionError("the scene loop runs every scene")  # unreachable: its fits is always true
+        plan = loop.plan(scene, asked)
+        if plan is not None:
+            return loop.run(scene, plan, asked, record, times)
+    raise AssertionError("the scene loop runs every scene")  # unreachable: its plan is always True
+
+
+# ----------------------------------------------------------------------------
+# the paper's system under its response protocol: each run a Scene, dispatched as every scene
+# ----------------------------------------------------------------------------
+
+
+@dataclass
+class RunResult:
+    """One run under the response protocol (model units): the amplitude over the window, its ratio to the bare
+    structure's resonant amplitude, the impacts per forcing cycle (aipc) and their class, and where it ended."""
+
+    r: float
+    amplitude: float
+    amplitude_ratio: float
+    aipc: float
+    ipc_class: int
+    diagnostics: dict
+    final_q: np.ndarray = field(repr=False)
+    final_v: np.ndarray = field(repr=False)
+    final_contacts: tuple = ()
+    records: dict | None = field(default=None, repr=False)
+    loop: str = "paper"
+
+    @property
+    def final(self) -> State:
+        """The State the run ended in: simulate_system(..., initial=run.final) continues it."""
+        return State(self.final_q, self.final_v, self.final_contacts)
+
+    @property
+    def final_state(self) -> np.ndarray:
+        """(x, x', y, y') at the run's end: the structure's and the damper mass's displacement and velocity."""
+        (x, y), (xd, yd) = self.final_q, self.final_v
+        return np.array([x, xd, y, yd])
+
+    def as_json(self) -> dict:
+        return {"r": self.r, "amplitude": self.amplitude, "amplitude_ratio": self.amplitude_ratio, "aipc": self.aipc,
+                "ipc_class": ipc_label(self.aipc), "diagnostics": self.diagnostics}
+
+
+def simulate_system(system: System, r: float, protocol: Protocol = Protocol(), *, record: int = 0,
+                    initial: State | None = None) -> RunResult:
+    """One run of the paper's system at frequency ratio r under the protocol, through :func:`simulate`.
+
+    record: keep up to this many impact records (layout.RECORD_COLUMNS).  initial: the State to start from
+    (a previous run's ``final``, or a closed-form orbit's point) instead of the protocol's rest state.
+    """
+    scene = paper_scene_from_system(system, r, protocol, initial=initial)
+    res = simulate(scene, DEFAULT_MEASURES + (("records",) if record else ()), record=record)
+    complete = math.isfinite(res.amplitude)
+    cycles = res.window_span * r / (2.0 * math.pi)
+    aipc = res.diagnostics["impacts_in_window"] / cycles if complete else math.nan
+    amax = system.a_max
+    return RunResult(r=float(r), amplitude=res.amplitude,
+                     amplitude_ratio=res.amplitude / amax if math.isfinite(amax) else math.nan, aipc=aipc,
+                     ipc_class=ipc_class(aipc), diagnostics=res.diagnostics, final_q=res.final_q,
+                     final_v=res.final_v, final_contacts=res.final_contacts, records=res.records, loop=res.loop)
+
+
+@dataclass
+class SweepResult:
+    """A frequency sweep under the protocol: per-r results and the paper's x_max, X_m."""
+
+    r: np.ndarray
+    runs: list
+
+    def column(self, name: str) -> np.ndarray:
+        if name in ("amplitude", "amplitude_ratio", "aipc", "ipc_class"):
+            return np.array([getattr(run, name) for run in self.runs])
+        return np.array([run.diagnostics[name] for run in self.runs])
+
+    @property
+    def x_max(self) -> float:
+        amp = self.column("amplitude")
+        return float(np.max(amp)) if np.all(np.isfinite(amp)) else math.nan
+
+    @property
+    def r_at_max(self) -> float:
+        amp = self.column("amplitude")
+        return float(self.r[int(np.nanargmax(amp))]) if np.any(np.isfinite(amp)) else math.nan
+
+
+SWEEP_MODES = ("from_rest", "continuation_up", "continuation_down")
+
+
+def _progress(values, show: bool):
+    """values, with a progress bar on stderr when asked and stderr is a terminal (tqdm: silent otherwise)."""
+    if not show:
+        return values
+    from tqdm import tqdm
+
+    return tqdm(values, desc="frequencies", unit="run", leave=False, disable=None)
+
+
+def sweep(system: System, r_values, protocol: Protocol = Protocol(), mode: str = "from_rest",
+          initial: State | None = None, progress: bool = False) -> SweepResult:
+    """Frequency sweep under the protocol.
+
+    from_rest: every frequency starts afresh from the protocol's start (or from `initial` when given: one
+    initial condition for every frequency).  continuation_up / _down: frequencies in increasing / decreasing
+    order, each starting from the final state of the previous one, as a slow physical sweep would; the force
+    stays continuous (its phase carries over).  Each frequency still runs the protocol's periods and window,
+    so the first average_from periods settle the new frequency.  Results are in the order of r_values either
+    way.  progress: a progress bar on stderr when it is a terminal (tqdm).
+    """
+    if mode not in SWEEP_MODES:
+        raise ValueError(f"sweep mode {mode!r} is not one of {', '.join(SWEEP_MODES)}")
+    r_values = np.asarray(r_values, dtype=float)
+    if mode == "from_rest":
+        runs = [simulate_system(system, float(r), protocol, initial=initial) for r in _progress(r_values, progress)]
+        return SweepResult(r=r_values, runs=runs)
+    order = np.argsort(r_values, kind="stable")
+    if mode == "continuation_down":
+        order = order[::-1]
+    runs = [None] * len(r_values)
+    current, state = system, initial
+    for i in _progress(order, progress):
+        r = float(r_values[i])
+        run = simulate_system(current, r, protocol, initial=state)
+        runs[i] = run
+        state = run.final
+        # the force phase at the end of this run is the next run's phase at t = 0
+        end_phase = math.remainder(r * protocol.t_end + current.phase, 2.0 * math.pi)
+        current = dataclasses.replace(current, phase=end_phase)
+    return SweepResult(r=r_values, runs=runs)

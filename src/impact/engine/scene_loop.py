@@ -1450,5 +1450,9 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
     for i in range(nf + nu):
         out.q[i] = q[i]
         out.v[i] = v[i]
+    for j in range(nu):
+        out.contact[j, 0] = mode[j]
+        out.contact[j, 1] = st.side[j]
+        out.contact[j, 2] = st.sigma[j]
     return int(diag[D_NREC])
 

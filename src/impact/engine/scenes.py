@@ -34,7 +34,7 @@ from impact.engine.scene_loop import run_scene
 from impact.model.building import Building
 from impact.model.kinds import KINDS, DamperKind
 from impact.model.params import ParameterError
-from impact.model.scene import Damper, ForceRecord, GroundMotion, Harmonic, Scene
+from impact.model.scene import Contact, Damper, ForceRecord, GroundMotion, Harmonic, Scene, State
 
 CACHE_SLOTS = 16        # configurations whose eigen-data are kept at once
 
@@ -67,6 +67,13 @@ class SceneResult:
     loop: str = "scene"
     #: a yielding building's storeys (StoreyResponse); None for an elastic one
     storeys: "StoreyResponse | None" = None
+    #: every unit's contact at the run's end (impact.model.scene.Contact), in Scene.unit_list() order
+    final_contacts: tuple = ()
+
+    @property
+    def final(self) -> State:
+        """The state the run ended in: Scene(..., initial=result.final) continues it."""
+        return State(self.final_q, self.final_v, self.final_contacts)
 
     def as_json(self, units: str = "m") -> dict:
         out = {
@@ -206,7 +213,19 @@ def _unasked(nf: int, peaks) -> list[slice]:
     return [part for group, part in parts.items() if group not in peaks]
 
 
+#: the engine's code of each contact mode of the model (impact.model.scene.CONTACT_MODES), and back
+MODE_CODES = {"free": L.MODE_FREE, "held": L.MODE_STUCK, "locked": L.MODE_LOCKED, "floor": L.MODE_FLOOR}
+CONTACT_MODE_OF_CODE = {code: mode for mode, code in MODE_CODES.items()}
+
+
+def contacts_of(rows) -> tuple:
+    """Each unit's Contact from the engine's rows (mode code, wall side, slide sign)."""
+    return tuple(Contact(CONTACT_MODE_OF_CODE[int(m)], int(side), int(slide)) for m, side, slide in rows)
+
+
 def _initial_state(scene: Scene, floor: np.ndarray, gap: np.ndarray, kind: np.ndarray, nfull: int):
+    if scene.initial is not None:
+        return _given_state(scene.initial, gap)
     nf = scene.building.storeys
     q = np.zeros(nfull)
     mode = np.zeros(len(gap), dtype=np.int64)
@@ -227,6 +246,17 @@ def _initial_state(scene: Scene, floor: np.ndarray, gap: np.ndarray, kind: np.nd
             mode[j] = L.MODE_STUCK
             side[j] = s
     return q, np.zeros(nfull), mode, side
+
+
+def _given_state(state: State, gap: np.ndarray):
+    """A scene's initial State as the loop's start: a unit given 'floor' starts free, and the loop finds at once
+    that its floor drags it (no relative velocity, friction), as it does for every unit at rest; a unit with a
+    gap of zero is one body with its floor, whatever it is given."""
+    mode = np.array([MODE_CODES[c.mode] if c.mode != "floor" else L.MODE_FREE for c in state.contacts],
+                    dtype=np.int64)
+    mode[gap == 0.0] = L.MODE_LOCKED
+    side = np.array([c.side for c in state.contacts], dtype=np.int64)
+    return np.array(state.q), np.array(state.v), mode, side
 
 
 def _cache(nmax: int) -> ConfigCache:
@@ -303,7 +333,8 @@ def run_arrays(arrays: dict, record: int = 0, times=None):
     ts = np.asarray(times, dtype=float) if times is not None else np.zeros(0)
     out = RunOutputs(recs=np.zeros((int(record), L.NREC)), diag=np.zeros(L.NDIAG), q=np.zeros(nfull),
                      v=np.zeros(nfull), peak=np.zeros(nmon), peak_t=np.zeros(nmon), x2=np.zeros(nmon), ts=ts,
-                     samples=np.zeros((len(ts), 2 * nfull)))
+                     samples=np.zeros((len(ts), 2 * nfull)),
+                     contact=np.zeros((len(arrays["start"].mode), 3), dtype=np.int64))
     a = arrays
     cache = ConfigCache(*(c.copy() for c in a["cache"]))
     yld = YieldArrays(*(x.copy() for x in a["yld"])) if a["yld"] is not None else None
@@ -391,6 +422,7 @@ def _result(scene: Scene, arrays: dict, out: dict, groups=PEAK_GROUPS, window: b
         amplitude=math.sqrt(2.0) * rms,
         window_span=float(span),
         storeys=_storey_response(scene, out["yld"], peaks[2:2 + nf], collapsed),
+        final_contacts=contacts_of(out["contact"]),
     )
 
 

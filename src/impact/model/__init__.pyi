@@ -10,11 +10,13 @@ from .records import kanai_tajimi as kanai_tajimi
 from .records import load_record as load_record
 from .records import narrow_band_force as narrow_band_force
 from .records import read_at2 as read_at2
+from .scene import Contact as Contact
 from .scene import Damper as Damper
 from .scene import ForceRecord as ForceRecord
 from .scene import GroundMotion as GroundMotion
 from .scene import Harmonic as Harmonic
 from .scene import Scene as Scene
+from .scene import State as State
 from .scene import paper_scene as paper_scene
 from .suites import record_by_key as record_by_key
 from .suites import suite_keys as suite_keys

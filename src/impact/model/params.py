@@ -13,6 +13,7 @@ the library refuse bad input with the same words.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import KW_ONLY, asdict, dataclass, field
 
@@ -75,11 +76,19 @@ def check_choice(name: str, value, allowed) -> None:
         raise ParameterError(f"{name} = {value!r} is not allowed: choose one of {', '.join(allowed)}")
 
 
+@functools.lru_cache(maxsize=256)
+def _interval(text: str) -> tuple[float, float, bool, bool]:
+    """(lo, hi, lo_open, hi_open) of an interval written "[lo, hi)": read once, since a sweep checks the same
+    intervals for each of its thousands of runs."""
+    lo, hi = (float(bound) for bound in text[1:-1].split(","))
+    return lo, hi, text[0] == "(", text[-1] == ")"
+
+
 def check_fields(obj, **allowed: str) -> None:
     """Check each named field of ``obj`` against its interval, written as the error message writes it."""
     for name, interval in allowed.items():
-        lo, hi = (float(bound) for bound in interval[1:-1].split(","))
-        _check(name, getattr(obj, name), lo, hi, lo_open=interval[0] == "(", hi_open=interval[-1] == ")")
+        lo, hi, lo_open, hi_open = _interval(interval)
+        _check(name, getattr(obj, name), lo, hi, lo_open=lo_open, hi_open=hi_open)
 
 
 def frequency_grid(r_min: float, r_max: float, r_step: float) -> np.ndarray:
@@ -139,9 +148,10 @@ class System:
                      frequency_hz="(0, 1e6]", unit_m="(0, 1e6]")
         kind = KINDS[self.kind]
         if kind.spring:
-            # a scene's upper bound (model.scene.Damper), named as the paper names the tuning; below MIN_TUNING the
-            # paper's own loop still runs a softening pendulum (its limit, the CID, is a test of that loop)
-            check_fields(self, rp=f"(0, {MAX_TUNING:g}]")
+            # a scene's range (model.scene.Damper), named as the paper names the tuning: every run of a System is
+            # a scene's (impact.engine.run.simulate_system).  The paper loop's limit r' -> 0, the CID, is a test
+            # of that loop called directly (tests/test_core.py)
+            check_fields(self, rp=f"[{MIN_TUNING:g}, {MAX_TUNING:g}]")
         if not kind.spring and self.rp != 0.0:
             raise ParameterError(f"rp = {self.rp!r} is not allowed for kind {self.kind!r}: the CID has no pendulum")
         if not kind.slides and self.nu != 0.0:

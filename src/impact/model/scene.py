@@ -15,6 +15,7 @@ motion decays freely until the scene's duration ends.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import KW_ONLY, dataclass
 
@@ -47,6 +48,64 @@ MIN_TANGENT = 1e-4
 EVENT_BUDGET_PER_DOF = 2_000_000
 
 DAMPER_KINDS = damper_kinds()  # the registry's kinds (model.kinds), as the study lists them
+
+#: a damper unit's contact with its walls or floor: moving on its own ("free"; a unit that has just struck the
+#: wall on `side` and is leaving it says which), resting against the wall on `side` and moving with its floor
+#: ("held"), one body with its floor ("locked", a gap of zero) or dragged along by its floor by friction ("floor")
+CONTACT_MODES = ("free", "held", "locked", "floor")
+_SIGNS = (-1, 0, 1)
+
+
+@dataclass(frozen=True)
+class Contact:
+    """One unit's contact state: its mode (CONTACT_MODES), the wall it is on or has just left (side -1 left,
+    +1 right, 0 none) and the direction it slides in against friction (slide -1, 0 or +1)."""
+
+    mode: str = "free"
+    side: int = 0
+    slide: int = 0
+
+    def __post_init__(self):
+        check_choice("mode", self.mode, CONTACT_MODES)
+        for name in ("side", "slide"):
+            if getattr(self, name) not in _SIGNS:
+                raise ParameterError(f"{name} = {getattr(self, name)!r} is out of range: allowed -1, 0 or 1")
+        if self.mode == "held" and self.side == 0:
+            raise ParameterError("side = 0 with mode 'held': a held unit rests against the wall on side -1 or 1")
+
+
+@dataclass(frozen=True)
+class State:
+    """Where a run starts or ended: every degree of freedom's displacement and velocity relative to the ground,
+    the floors first (storey 1 first), then the units in Scene.unit_list() order, in the scene's units; and each
+    unit's Contact.  A run's final State (SceneResult.final) is the next run's Scene(initial=...): a
+    continuation."""
+
+    q: tuple
+    v: tuple
+    contacts: tuple = ()
+
+    def __post_init__(self):
+        for name in ("q", "v"):
+            values = tuple(float(x) for x in getattr(self, name))
+            if not all(math.isfinite(x) for x in values):
+                raise ParameterError(f"initial.{name}: every value must be finite")
+            object.__setattr__(self, name, values)
+        if len(self.q) != len(self.v):
+            raise ParameterError(f"initial.q has {len(self.q)} values and initial.v {len(self.v)}: give one each "
+                                 "per degree of freedom")
+        contacts = tuple(self.contacts)
+        for k, c in enumerate(contacts):
+            if not isinstance(c, Contact):
+                raise ParameterError(f"initial.contacts[{k}] must be a Contact, got {type(c).__name__}")
+        object.__setattr__(self, "contacts", contacts)
+
+    @classmethod
+    def paper(cls, z, contact: Contact = Contact()) -> "State":
+        """The paper's one storey and one unit from its (x, x', y, y'): the structure's and the damper mass's
+        displacement and velocity."""
+        x, xd, y, yd = (float(c) for c in z)
+        return cls((x, y), (xd, yd), (contact,))
 
 
 @dataclass(frozen=True)
@@ -209,6 +268,10 @@ class Scene:
     collapse_drift_ratio
         a yielding building's run stops as a collapse once a storey's drift passes this fraction of its height
         (None: never; needs the building's storey heights)
+    initial
+        the State the run starts from, every degree of freedom's displacement and velocity and every unit's
+        contact (None: at rest, the units placed by start or unit_starts, which it overrides); a run's final
+        State continues it (SceneResult.final)
     """
 
     building: Building
@@ -222,6 +285,7 @@ class Scene:
     unit_starts: tuple | None = None
     collapse_drift_ratio: float | None = None
     max_events: int | None = None
+    initial: State | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "dampers", tuple(self.dampers))
@@ -260,6 +324,8 @@ class Scene:
                 raise ParameterError("collapse_drift_ratio needs the building's storey_height")
         if self.unit_starts is not None:
             self._check_unit_starts()
+        if self.initial is not None:
+            self._check_initial()
 
     def _check_unit_starts(self) -> None:
         starts = tuple(float(x) for x in self.unit_starts)
@@ -270,6 +336,27 @@ class Scene:
             half = 0.5 * d.gap if d.has_walls else 0.0
             _check(f"unit_starts[{k}]", x, -half, half)
         object.__setattr__(self, "unit_starts", starts)
+
+    def _check_initial(self) -> None:
+        state, units = self.initial, self.unit_list()
+        if not isinstance(state, State):
+            raise ParameterError(f"initial must be a State, got {type(state).__name__}")
+        if self.unit_starts is not None:
+            raise ParameterError("initial and unit_starts both place the units: give one of them")
+        n = self.building.storeys + len(units)
+        if len(state.q) != n or len(state.contacts) != len(units):
+            raise ParameterError(f"initial has {len(state.q)} degrees of freedom and {len(state.contacts)} contacts; "
+                                 f"this scene has {n} ({self.building.storeys} floors, {len(units)} units) and "
+                                 f"{len(units)} contacts")
+        for k, (c, (_, d)) in enumerate(zip(state.contacts, units)):
+            stroke = state.q[self.building.storeys + k] - state.q[self.floor_index(d.floor)]
+            half = 0.5 * d.gap if d.has_walls else math.inf
+            if abs(stroke) > half * (1.0 + 1e-12):
+                raise ParameterError(f"initial.q: unit {k}'s stroke {stroke:g} is beyond its walls: allowed "
+                                     f"[{-half:g}, {half:g}]")
+            if c.mode != "free" and not d.has_walls:
+                raise ParameterError(f"initial.contacts[{k}].mode = {c.mode!r}: a {d.kind} unit has no walls, "
+                                     "it is 'free'")
 
     @property
     def event_budget(self) -> int:
@@ -328,26 +415,53 @@ class Scene:
                                      "drift can grow without bound, so give collapse_drift_ratio to stop the run")
 
 
+@functools.lru_cache(maxsize=64)
+def _paper_building(beta: float) -> Building:
+    """Building.paper(beta), built once per damping: a sweep's thousands of runs share their structure (its
+    arrays read-only, so that sharing is safe), which halves what building a run's scene costs."""
+    building = Building.paper(beta)
+    for values in (building.masses, building.storey_stiffness, building.damping):
+        values.flags.writeable = False
+    return building
+
+
+@functools.lru_cache(maxsize=256)
+def _paper_damper(kind: str, mu: float, gap: float, e: float, tuning: float, nu: float, units: int) -> Damper:
+    """The paper's damper of these numbers, checked once: a sweep's runs share it (Damper is frozen)."""
+    return Damper(kind, mass=mu, gap=gap, e=e, tuning=tuning, nu=nu, units=units)
+
+
 def paper_scene(kind: str, mu: float, beta: float, e: float, gap: float, r: float, *, rp: float = 0.0,
                 force_ratio: float = 0.096, periods: float = 500.0, average_from: float = 250.0,
                 start: str = "centre", units: int = 1, nu: float = 0.0, gravity: float = G_GRAV,
-                phase: float = 0.0, max_events_per_period: int = 20000) -> Scene:
+                phase: float = 0.0, max_events_per_period: int = 20000, initial: State | None = None) -> Scene:
     """The paper's one-storey structure in model units (M = 1, omega = 1) as a scene."""
-    building = Building.paper(beta)
-    damper = Damper(kind, mass=mu, gap=gap, e=e, tuning=rp if kind_of(kind).spring else 0.0, nu=nu, units=units)
+    building = _paper_building(float(beta))
+    damper = _paper_damper(kind, float(mu), float(gap), float(e), float(rp) if kind_of(kind).spring else 0.0,
+                           float(nu), int(units))
     period = 2.0 * math.pi
     # the protocol bounds a run by its periods and its cap per period, as the paper loop's own runs: no budget
     budget = max_events_per_period * (math.ceil(periods) + 1)
     return Scene(building, (damper,), Harmonic(force_ratio, r, phase), duration=periods * period,
                  window=average_from * period, start=start, gravity=gravity,
-                 max_events_per_period=max_events_per_period, max_events=budget)
+                 max_events_per_period=max_events_per_period, max_events=budget, initial=initial)
 
 
-def paper_scene_from_system(system, r: float, protocol, units: int = 1) -> Scene:
+def _gravity_of_friction(nu: float, a_f: float) -> float:
+    """The scene's gravity for the paper system's friction: a_f / nu, or the float next to it when that is the one
+    whose product with nu is a_f again, so that the scene's friction, nu times its gravity, is the system's to the
+    bit (a run of the system and of its scene are then the same run)."""
+    g = a_f / nu
+    for candidate in (g, math.nextafter(g, math.inf), math.nextafter(g, -math.inf)):
+        if nu * candidate == a_f:
+            return candidate
+    return g
+
+
+def paper_scene_from_system(system, r: float, protocol, units: int = 1, initial: State | None = None) -> Scene:
     """The scene of one run of the paper kernel (impact.model.params System and Protocol), optionally multi-unit."""
-    # friction's scale in model units is carried by the system; as the scene's gravity it is a_f / nu
-    gravity = system.friction_accel / system.nu if system.nu > 0 else G_GRAV
+    gravity = _gravity_of_friction(system.nu, system.friction_accel) if system.nu > 0 else G_GRAV
     return paper_scene(system.kind, system.mu, system.beta, system.e, system.gap, r, rp=system.rp,
                        force_ratio=system.force_ratio, periods=protocol.periods, average_from=protocol.average_from,
                        start=protocol.start, units=units, nu=system.nu, gravity=gravity, phase=system.phase,
-                       max_events_per_period=protocol.max_events_per_period)
+                       max_events_per_period=protocol.max_events_per_period, initial=initial)

@@ -15,10 +15,9 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from impact.engine import layout as L
-from impact.engine import paper_loop as K
-from impact.engine.paper import sweep
+from impact.engine.run import sweep
 from impact.model.params import Protocol, System, curve_id
+from impact.model.scene import Contact, State
 from impact.outputs.datasets import LENGTH_NOTE, LENGTH_UNIT
 from impact.stages.sweeps import curve_system, freq_grid, gap_grid
 
@@ -45,15 +44,14 @@ def ensemble_members(n: int, seed: int) -> pd.DataFrame:
     return pd.concat([rest, drawn], ignore_index=True)
 
 
-def member_state(system: System, member) -> tuple[np.ndarray, int]:
-    """(x, x', y, y') and contact code of one member for this system."""
+def member_state(system: System, member) -> State:
+    """Where one member starts for this system: at rest on a wall, or free."""
     half = 0.5 * system.gap
     if member["velocity"] == 0.0 and abs(member["place"]) == 1.0 and system.gap > 0:
         side = int(member["place"])
-        return np.array([0.0, 0.0, side * half, 0.0]), K.contact_code(L.MODE_STUCK, side, 0)
+        return State.paper((0.0, 0.0, side * half, 0.0), Contact("held", side))
     x0 = member["structure"] * system.a_max
-    state = np.array([x0, 0.0, x0 + member["place"] * half, member["velocity"] * system.a_max])
-    return state, K.contact_code(L.MODE_FREE, 0, 0)
+    return State.paper((x0, 0.0, x0 + member["place"] * half, member["velocity"] * system.a_max))
 
 
 def count_attractors(amplitude: np.ndarray, aipc: np.ndarray) -> int:
@@ -75,8 +73,7 @@ def run_ensemble(cfg: dict, spec: dict, members: pd.DataFrame, protocol: Protoco
     for j, g in enumerate(gaps):
         system = curve_system(cfg, spec, float(g))
         for i, member in members.iterrows():
-            state, code = member_state(system, member)
-            result = sweep(system, r, protocol, state=state, contact=code)
+            result = sweep(system, r, protocol, initial=member_state(system, member))
             amp[i, j] = result.column("amplitude")
             aipc[i, j] = result.column("aipc")
     return ensemble_dataset(spec, members, gaps, r, amp, aipc, curve_system(cfg, spec, 1.0).a_max)

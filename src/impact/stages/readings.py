@@ -23,7 +23,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from impact.closed_form.masri import BRANCHES, forced_flow, masri_2eipc
-from impact.engine.paper import simulate
+from impact.engine.run import simulate_system as simulate
 from impact.model.kinds import is_free_mass
 from impact.model.params import Protocol, System
 

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from impact.engine.paper import sweep
+from impact.engine.run import sweep
 from impact.model.kinds import either, kind_of, kinds_with
 from impact.model.params import ParameterError, Protocol, System, curve_id, frequency_grid
 from impact.outputs.datasets import curve_dataset

@@ -26,7 +26,7 @@ import numpy as np
 import xarray as xr
 
 from impact.closed_form.tmd import tmd_optimum, tmd_peak
-from impact.engine.paper import sweep
+from impact.engine.run import sweep
 from impact.model.kinds import KINDS, TMD
 from impact.model.params import ParameterError, Protocol, System, a_max, frequency_grid
 from impact.model.scene import DAMPER_KINDS

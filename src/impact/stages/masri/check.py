@@ -20,15 +20,14 @@ import pandas as pd
 import xarray as xr
 
 from impact.closed_form.masri import BRANCHES, masri_2eipc, orbit_initial_state, orbit_rms_amplitude
-from impact.engine import layout as L
-from impact.engine import paper_loop as K
-from impact.engine.paper import simulate
+from impact.engine.run import simulate_system as simulate
 from impact.model.kinds import CID
 from impact.model.params import Protocol, System, a_max, frequency_grid
+from impact.model.scene import Contact, State
 from impact.outputs.files import as_integers, flag
 from impact.stages.masri.charts import branches
 
-JUST_AFTER_RIGHT_IMPACT = K.contact_code(L.MODE_FREE, 1, 0)
+JUST_AFTER_RIGHT_IMPACT = Contact("free", side=1)
 LANDING_TOLERANCE = 1e-3
 
 
@@ -67,7 +66,7 @@ def check_stable(mu, e, beta, r, gap, force_ratio, root, half_periods=200) -> di
     system = _orbit_system(mu, e, beta, gap, force_ratio, root)
     periods = half_periods / 2 / r  # natural periods for that many forcing half periods
     res = simulate(system, r, Protocol(periods=periods, average_from=0.0), record=half_periods + 10,
-                   state=orbit_initial_state(root, gap), contact=JUST_AFTER_RIGHT_IMPACT)
+                   initial=State.paper(orbit_initial_state(root, gap), JUST_AFTER_RIGHT_IMPACT))
     rec = res.records
     dev = _deviations(rec, root, r)
     amp_cf = orbit_rms_amplitude(root, mu, e, beta, r, gap, force_ratio)
@@ -89,7 +88,7 @@ def check_unstable(mu, e, beta, r, gap, force_ratio, root, max_half_periods=4000
     state[3] *= 1.0 + kick
     periods = max_half_periods / 2 / r
     res = simulate(system, r, Protocol(periods=periods, average_from=0.0), record=max_half_periods + 10,
-                   state=state, contact=JUST_AFTER_RIGHT_IMPACT)
+                   initial=State.paper(state, JUST_AFTER_RIGHT_IMPACT))
     comp = _deviation_components(res.records, root, r)
     dev = np.sqrt(np.sum(comp ** 2, axis=1))
     left = bool(np.any(~np.isfinite(dev)) or np.any(dev > 1e-2))

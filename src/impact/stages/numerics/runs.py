@@ -13,7 +13,7 @@ import pandas as pd
 import xarray as xr
 
 from impact.baselines import simulate_ivp, simulate_moreau_jean, simulate_penalty, simulate_rk4
-from impact.engine.paper import simulate
+from impact.engine.run import simulate_system as simulate
 from impact.model.params import Protocol, System
 from impact.outputs.labels import TOO_SLOW
 from impact.stages.numerics.plan import (
