@@ -236,3 +236,34 @@ def test_a_contact_out_of_range_is_refused_by_name():
         Contact("held")
     with pytest.raises(ParameterError, match="slide"):
         Contact("free", slide=2)
+
+
+def test_a_free_decay_is_a_scene_with_no_force_on_either_loop():
+    """Released from x0 with the damper mass beside it and no force: the bare structure's closed form before the
+    first impact, and the paper loop's dense output (its samples rebuilt between impacts) equal to the scene
+    loop's dense output to round-off across the impacts that follow."""
+    system = System.from_gap_ratio("pid", gap_ratio=1.0, rp=1.0, **PAPER)
+    x0 = 2.0
+    scene = paper_scene_from_system(dataclasses.replace(system, force_ratio=0.0), 1.0,
+                                    Protocol(periods=8.0, average_from=0.0), initial=State.paper((x0, 0, x0, 0)))
+    times = np.linspace(0.0, scene.t_end, 801)
+    fast = engine.simulate(scene, ("samples", "records"), record=100, times=times)
+    full = engine.simulate(scene, ("samples", "records", "peaks"), record=100, times=times)
+    assert (fast.loop, full.loop) == ("paper", "scene") and fast.impacts == full.impacts > 2
+    assert math.isnan(fast.diagnostics["energy_residual"]) and abs(full.diagnostics["energy_residual"]) <= 1e-9
+    np.testing.assert_allclose(fast.samples["q"], full.samples["q"], rtol=0, atol=1e-10 * x0)
+    np.testing.assert_allclose(fast.records["t"], full.records["t"], rtol=1e-10)
+    # before the first impact the structure is the damped oscillator and the pendulum hangs with it (no force)
+    before = times < fast.records["t"][0]
+    b, wd = system.beta, math.sqrt(1.0 - system.beta ** 2)
+    bare = x0 * np.exp(-b * times) * (np.cos(wd * times) + b / wd * np.sin(wd * times))
+    x = fast.samples["q"][:, 0]
+    assert np.max(np.abs(x[before] - bare[before])) > 0  # the pendulum's reaction is there, small
+    np.testing.assert_allclose(x[before], bare[before], rtol=0, atol=0.05 * x0)
+
+
+def test_the_paper_loops_dense_output_refuses_friction_by_name():
+    system = System.from_gap_ratio("cid", gap_ratio=1.0, nu=0.05, **PAPER)
+    scene = paper_scene_from_system(system, 1.0, SHORT)
+    with pytest.raises(ParameterError, match="friction"):
+        engine.simulate(scene, ("samples",), times=np.array([0.0, 1.0]))

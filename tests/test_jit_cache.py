@@ -71,8 +71,8 @@ _CACHE_FOLDERS = """
 import json
 from impact.engine.paper_loop import run
 from impact.engine.scene_loop import run_scene
-from impact.stages.validation.paper_model import _model_samples
-print(json.dumps([f._cache._cache_path for f in (run, run_scene, _model_samples)]))
+from impact.engine.sampler import paper_samples
+print(json.dumps([f._cache._cache_path for f in (run, run_scene, paper_samples)]))
 """
 
 

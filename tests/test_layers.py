@@ -97,10 +97,9 @@ def test_imports_go_down_the_layers(path):
 #: the engine's ways in for the parts above it: the entry point (run: simulate for scenes, simulate_system and
 #: sweep for the paper's system on it) and Sa on a one-storey scene (spectra, itself a run.simulate)
 ENGINE_ENTRIES = {"impact.engine.run", "impact.engine.spectra"}
-#: what reaches the engine's insides, and why (docs/architecture.md, "The engine's two loops and its one entry
-#: point"): the compile command compiles the loops; the rig takes the engine's compile lock; the validation's
-#: model samples the paper loop densely between its events, which the dispatch does not offer on that loop
-ENGINE_INSIDE = {"cli/upkeep.py", "rig/simulator.py", "stages/validation/paper_model.py"}
+#: what reaches the engine's insides, and why: the compile command compiles the loops; the rig takes the engine's
+#: compile lock for its own kernels
+ENGINE_INSIDE = {"cli/upkeep.py", "rig/simulator.py"}
 
 
 def test_the_stages_and_the_command_line_come_into_the_engine_through_its_entry_point():

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from impact.engine import layout, paper, run
 from impact.engine.run import simulate_system as simulate
 from impact.model.params import Protocol
 from impact.outputs.measurements import load_measurements
@@ -46,12 +47,26 @@ def test_grid_has_the_papers_108_cases():
 
 
 def test_model_records_rebuilt_from_events_equal_the_kernel_sample_by_sample(cfg):
+    """The paper loop's dense output (a forcing period's samples rebuilt from each call's impacts) against the loop
+    called once per sample interval; and the model run through the entry point is that dense output."""
     ts = np.arange(3000, 4001) / 100.0
-    dense = M._run_model(cfg, IMPACTING, 0.99, ts, forced=True)
-    stepwise = M._run_model(cfg, IMPACTING, 0.99, ts, forced=True, chunk=1)
-    assert dense.impact_times_s.size > 20  # 2 impacts per cycle
-    np.testing.assert_allclose(dense.x_mm, stepwise.x_mm, rtol=0, atol=1e-9)
-    np.testing.assert_allclose(dense.s_mm, stepwise.s_mm, rtol=0, atol=1e-9)
+    omega = 2.0 * np.pi * float(cfg["structure"]["frequency_hz"])
+    tm = ts * omega
+    scene = M._model_scene(cfg, IMPACTING, 0.99, float(tm[-1]), forced=True, x0_mm=0.0)
+    system = run.as_paper_system(scene)
+    p = paper.run_parameters(system, 0.99, scene.t_end, 0.0, scene.max_events_per_period)
+    paper.ensure_sampler_compiled()
+
+    def sampled(chunk):
+        return paper.dense_samples(p.copy(), paper.pid_data(system, 0.99), np.zeros(4), paper.FREE_FLIGHT, tm, chunk,
+                                   1000)
+
+    (dense, kept, *_), (stepwise, *_) = sampled(67), sampled(1)
+    assert len(kept) > 20  # 2 impacts per cycle
+    np.testing.assert_allclose(dense, stepwise, rtol=0, atol=1e-9)
+    model = M._run_model(cfg, IMPACTING, 0.99, ts, forced=True)
+    assert np.array_equal(model.x_mm, dense[:, 0]) and np.array_equal(model.s_mm, dense[:, 2] - dense[:, 0])
+    assert np.array_equal(model.impact_times_s, kept[:, layout.R_T] / omega)
 
 
 def test_model_record_amplitude_matches_the_production_protocol(cfg):

@@ -10,7 +10,7 @@ import time
 # the engine's name for its cache folder is private; making it public would edit the engine's sources, which
 # purges every compiled kernel and reruns the whole study (jitcache.sources_digest, code_deps)
 from impact.engine.jitcache import _cache_dir as cache_dir
-from impact.engine.paper import ensure_compiled
+from impact.engine.paper import ensure_compiled, ensure_sampler_compiled
 from impact.engine.scenes import compile_scene_loops
 from impact.model.kinds import KINDS, kinds_with
 from impact.model.params import ParameterError
@@ -32,12 +32,14 @@ def verify_archive(args) -> dict:
 
 def compile_kernels(args) -> dict:
     """Compile every kernel the study runs into numba's on-disk cache, once (make setup runs it): each
-    specialisation of the scene loop on elastic buildings, the paper loop for each damper, the virtual test rig."""
+    specialisation of the scene loop on elastic buildings, the paper loop for each damper and its dense output, the
+    virtual test rig."""
     start = time.perf_counter()
     compile_scene_loops()
     for kind in kinds_with("paper"):
         for friction in (False, True) if KINDS[kind].slides else (False,):
             ensure_compiled(kind, friction)
+    ensure_sampler_compiled()
     warm_up()
     return {"compiled": "every kernel of the study", "cache": os.fspath(cache_dir()),
             "seconds": round(time.perf_counter() - start, 1)}

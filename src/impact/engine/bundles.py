@@ -52,6 +52,10 @@ MonitorArrays = namedtuple("MonitorArrays", "rows kind record_coef cap")
 #: row cf, exp(kap tau) eh, |kap|^n kpow and the exponents it was made for), the polynomial parts (poly; pp as the
 #: search takes it), the searches' outputs (ev, ev2), the contact state c (paper_loop.C_*), the run's parameters
 #: p, its state z, diagnostics and impact records
+#: one call of the paper loop for its dense output (sampler.paper_samples): its parameters, the PID's eigen-data, and
+#: where it writes (impact records, diagnostics, the final state)
+PaperCall = namedtuple("PaperCall", "p pid rec diag z_out")
+
 PaperWork = namedtuple("PaperWork", "kap cx cy cs cv cq cf eh kpow kap_powered poly pp ev ev2 c p z diag rec")
 
 #: the scene's arrays that every run has: parameters (layout.P_*), building, units, load vector, monitors

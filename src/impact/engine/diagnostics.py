@@ -56,6 +56,11 @@ def stop(diag) -> dict:
             "stop_unit": element if by and not storey else -1, "stop_storey": element + 1 if by and storey else -1}
 
 
+#: the energy balance's terms in a run's diagnostics (energy_balance), and the deepest penetration
+ENERGY_TERMS = ("energy_residual", "work_input", "viscous_dissipation", "impact_losses", "friction_work",
+                "max_penetration")
+
+
 def read_diagnostics(diag) -> dict:
     """The counters, the penetration and the energy balance of a loop's diagnostics array, and why it stopped."""
     out = {name: kind(diag[index]) for name, index, kind in _DIAGNOSTIC_FIELDS}

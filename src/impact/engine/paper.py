@@ -15,6 +15,8 @@ import numpy as np
 
 from impact.engine import layout as L
 from impact.engine import paper_loop as K
+from impact.engine import sampler as S
+from impact.engine.bundles import PaperCall
 from impact.engine.contact import STICK_VELOCITY
 from impact.engine.jitcache import compile_lock
 from impact.model.kinds import KINDS
@@ -40,6 +42,36 @@ def ensure_compiled(kind: str, friction: bool = False) -> None:
     _WARM.add(key)
 
 
+def ensure_sampler_compiled() -> None:
+    """Compile (or load) the paper loop's dense output (sampler.paper_samples, for the PID and the CID), under
+    compile_lock."""
+    if "samples" in _WARM:
+        return
+    for kind in ("cid", "pid"):
+        ensure_compiled(kind)  # the loop it calls, under the lock of its own
+    with compile_lock("paper-samples", "the paper loop's dense output", fresh=(S.paper_samples,)):
+        for kind in ("cid", "pid"):
+            probe = System(kind, mu=0.01, beta=0.05, e=0.5, gap=1.0, rp=1.0 if KINDS[kind].spring else 0.0)
+            dense_samples(param_vector(probe, 0.9, Protocol(periods=1.0, average_from=0.0)), pid_data(probe, 0.9),
+                          np.zeros(4), FREE_FLIGHT, np.array([0.0, 0.5, 1.0]), 2, 1)
+    _WARM.add("samples")
+
+
+def dense_samples(p: np.ndarray, pid, z0, code: int, times: np.ndarray, chunk: int, record: int):
+    """The paper loop's dense output (sampler.paper_samples) from p[P_T0] through the sorted times: (the state
+    (x, x', y, y') at each time, the impact records kept (up to `record`), the impacts in all, whether the event
+    guard stopped a call, the final contact code, the final state)."""
+    call = PaperCall(p, pid, np.zeros((512, L.NREC)), np.zeros(L.NDIAG), np.zeros(4))
+    z = np.array(z0, dtype=float)
+    zs = np.empty((len(times), 4))
+    kept = np.zeros((int(record), L.NREC))
+    out = np.zeros(3)
+    S.paper_samples(call, z, int(code), float(p[L.P_T0]), np.ascontiguousarray(times, dtype=float), zs, kept, out,
+                    int(chunk))
+    n = int(out[0])
+    return zs, kept[:min(n, kept.shape[0])], n, bool(out[1]), int(out[2]), z
+
+
 def pid_data(system: System, r: float):
     """Eigen-data of the PID's free flight and the harmonic particular solution.
 
@@ -59,7 +91,8 @@ def pid_data(system: System, r: float):
     vec = vec.astype(np.complex128)
     vinv = np.linalg.inv(vec)
     forcing = np.array([0.0, system.force_ratio, 0.0, 0.0], dtype=np.complex128)
-    zc = np.linalg.solve(1j * r * np.eye(4) - a, forcing)
+    # no force (a free decay): no particular solution, exactly
+    zc = np.linalg.solve(1j * r * np.eye(4) - a, forcing) if system.force_ratio else np.zeros(4, np.complex128)
     return (lam.astype(np.complex128), vec, vinv, zc)
 
 

@@ -29,7 +29,8 @@ import numpy as np
 from impact.engine import layout as L
 from impact.engine import paper
 from impact.engine import paper_loop as K
-from impact.engine.diagnostics import read_diagnostics
+from impact.engine.contact import STICK_VELOCITY
+from impact.engine.diagnostics import ENERGY_TERMS, read_diagnostics
 from impact.engine.scenes import MODE_CODES, PEAK_GROUPS, SceneResult, contacts_of, simulate_scene
 from impact.model.params import ParameterError, Protocol, System, ipc_class, ipc_label
 from impact.model.scene import Harmonic, Scene, State, paper_scene_from_system
@@ -40,6 +41,9 @@ from impact.model.scene import Harmonic, Scene, State, paper_scene_from_system
 MEASURES = ("amplitude", "impacts", "peaks", "drifts", "strokes", "records", "samples")
 DEFAULT_MEASURES = ("amplitude", "impacts")
 PAPER_MEASURES = frozenset(("amplitude", "impacts", "records"))
+#: what the paper loop's dense output measures (paper.dense_samples): the state at the sample times, the impacts and
+#: their records.  It runs the loop in chunks between the samples, so it integrates no window: no amplitude
+PAPER_SAMPLED_MEASURES = frozenset(("samples", "impacts", "records"))
 
 
 @dataclass(frozen=True)
@@ -85,7 +89,8 @@ def _system(kind: str, mu: float, beta: float, e: float, gap: float, rp: float, 
 
 def _paper_plan(scene: Scene, measures: frozenset) -> System | None:
     """The scene's System, when the paper loop measures what is asked and the scene is the paper's case."""
-    return as_paper_system(scene) if measures <= PAPER_MEASURES else None
+    fits = measures <= PAPER_MEASURES or ("samples" in measures and measures <= PAPER_SAMPLED_MEASURES)
+    return as_paper_system(scene) if fits else None
 
 
 def _paper_start(system: System, scene: Scene) -> tuple[np.ndarray, int]:
@@ -107,6 +112,10 @@ def _run_paper(scene: Scene, system: System, measures: frozenset, record: int, t
     z0, code = _paper_start(system, scene)
     p = paper.run_parameters(system, r, scene.t_end, scene.t_window, scene.max_events_per_period,
                              max_events=scene.event_budget)
+    if not system.force_ratio:  # a free vibration: the stick velocity scales with where it starts
+        p[L.P_VSTICK] = STICK_VELOCITY * float(np.max(np.abs(z0)))
+    if "samples" in measures:
+        return _sampled_paper_run(scene, system, p, z0, code, record, times)
     fric = np.array([system.nu * scene.gravity]) if system.nu > 0.0 else None
     paper.ensure_compiled(system.kind, fric is not None)
     diag = np.zeros(L.NDIAG)
@@ -122,6 +131,36 @@ def _run_paper(scene: Scene, system: System, measures: frozenset, record: int, t
         peak_strokes=np.full(1, nan), impacts=int(diag[L.D_IMPACTS]), diagnostics=read_diagnostics(diag),
         final_q=z_out[[0, 2]].copy(), final_v=z_out[[1, 3]].copy(), records=_records(rec, diag),
         amplitude=amp, window_span=float(span), loop="paper", final_contacts=_paper_contact(int(final)))
+
+
+def _sampled_paper_run(scene: Scene, system: System, p: np.ndarray, z0: np.ndarray, code: int, record: int,
+                       times) -> SceneResult:
+    """The paper loop's dense output: the state at the sorted times, run in chunks of about one forcing period's
+    samples (each chunk one call of the loop, its samples rebuilt from its impacts' post-impact states).  Its
+    diagnostics count the impacts and say whether the event guard stopped a call; its energy terms are NaN, since
+    each call balances its own."""
+    if system.nu > 0.0:
+        raise ParameterError("the paper loop's dense output has no friction: ask the scene loop (measures 'peaks')")
+    times = np.asarray(times, dtype=float)
+    r = scene.load.omega
+    spacing = (times[-1] - times[0]) / (len(times) - 1) if len(times) > 1 else 2.0 * math.pi / r
+    chunk = max(1, int(round(2.0 * math.pi / (r * spacing))))
+    paper.ensure_sampler_compiled()
+    zs, kept, impacts, capped, final, z = paper.dense_samples(p, paper.pid_data(system, r), z0, code, times, chunk,
+                                                              record)
+    diag = np.zeros(L.NDIAG)
+    diag[L.D_IMPACTS] = impacts
+    diag[L.D_CAP] = 1.0 if capped else 0.0
+    nan = math.nan
+    diagnostics = read_diagnostics(diag)
+    diagnostics.update({key: nan for key in ENERGY_TERMS})
+    return SceneResult(
+        scene=scene, peak_roof_displacement=nan, peak_roof_displacement_time=nan, rms_roof_displacement=nan,
+        peak_roof_acceleration=nan, peak_interstorey_drift=nan, peak_drifts=np.full(1, nan),
+        peak_strokes=np.full(1, nan), impacts=impacts, diagnostics=diagnostics, final_q=z[[0, 2]].copy(),
+        final_v=z[[1, 3]].copy(), records={c: kept[:, i].copy() for i, c in enumerate(L.RECORD_COLUMNS)},
+        samples={"t": times, "q": zs[:, [0, 2]], "v": zs[:, [1, 3]]}, loop="paper",
+        final_contacts=_paper_contact(final))
 
 
 def _records(rec: np.ndarray, diag: np.ndarray) -> dict | None:
@@ -230,7 +269,7 @@ def simulate_system(system: System, r: float, protocol: Protocol = Protocol(), *
     aipc = res.diagnostics["impacts_in_window"] / cycles if complete else math.nan
     amax = system.a_max
     return RunResult(r=float(r), amplitude=res.amplitude,
-                     amplitude_ratio=res.amplitude / amax if math.isfinite(amax) else math.nan, aipc=aipc,
+                     amplitude_ratio=res.amplitude / amax if 0.0 < amax < math.inf else math.nan, aipc=aipc,
                      ipc_class=ipc_class(aipc), diagnostics=res.diagnostics, final_q=res.final_q,
                      final_v=res.final_v, final_contacts=res.final_contacts, records=res.records, loop=res.loop)
 

@@ -248,6 +248,15 @@ def _initial_state(scene: Scene, floor: np.ndarray, gap: np.ndarray, kind: np.nd
     return q, np.zeros(nfull), mode, side
 
 
+def _free_vibration_scale(scene: Scene, mass: float, omega1: float) -> float:
+    """A free vibration's force scale for the stick velocity: the force M omega1^2 X that holds the building at the
+    initial State's displacement scale X (its largest displacement, or velocity over omega1); 0 at rest."""
+    if scene.initial is None:
+        return 0.0
+    x = max(max(map(abs, scene.initial.q)), max(map(abs, scene.initial.v)) / omega1)
+    return mass * omega1 ** 2 * x
+
+
 def _given_state(state: State, gap: np.ndarray):
     """A scene's initial State as the loop's start: a unit given 'floor' starts free, and the loop finds at once
     that its floor drags it (no relative velocity, friction), as it does for every unit at rest; a unit with a
@@ -317,6 +326,8 @@ def _scene_arrays(scene: Scene, peaks=PEAK_GROUPS, window: bool = True):
         scale = scene.load.amplitude
     else:
         scale = float(np.sum(np.abs(load_vec)) * np.max(np.abs(record)))
+    if scale == 0.0:
+        scale = _free_vibration_scale(scene, float(np.sum(mass_full)), omega1)
     p[L.P_VSTICK] = STICK_VELOCITY * scale / (float(np.sum(mass_full)) * omega1) if scale > 0 else 0.0
     p[L.P_REC_T0] = 0.0
     p[L.P_REC_DT] = rec_dt

@@ -144,7 +144,7 @@ class System:
     def __post_init__(self):
         check_choice("kind", self.kind, PAPER_KINDS)
         check_fields(self, mu="(0, 10]", beta="[0, 1)", e="[0, 1]", gap="[0, 1e12]",
-                     force_ratio="(0, 1e12]", phase=f"[{-2 * math.pi}, {2 * math.pi}]", nu="[0, 100]",
+                     force_ratio="[0, 1e12]", phase=f"[{-2 * math.pi}, {2 * math.pi}]", nu="[0, 100]",
                      frequency_hz="(0, 1e6]", unit_m="(0, 1e6]")
         kind = KINDS[self.kind]
         if kind.spring:
@@ -171,7 +171,7 @@ class System:
 
     @property
     def gap_ratio(self) -> float:
-        return self.gap / self.a_max
+        return self.gap / self.a_max if self.a_max else math.nan  # no force (a free decay): no A_max
 
     @property
     def friction_accel(self) -> float:

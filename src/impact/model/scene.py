@@ -160,7 +160,8 @@ class Damper:
 
 @dataclass(frozen=True, eq=False)
 class Harmonic:
-    """A force F0 sin(Omega t + phi) on one floor (None: the roof)."""
+    """A force F0 sin(Omega t + phi) on one floor (None: the roof).  F0 = 0 is no force: the scene's free vibration
+    from its initial State (a free decay)."""
 
     amplitude: float
     omega: float
@@ -168,7 +169,7 @@ class Harmonic:
     floor: int | None = None
 
     def __post_init__(self):
-        _check("amplitude", self.amplitude, 0.0, 1e18, lo_open=True)
+        _check("amplitude", self.amplitude, 0.0, 1e18)
         _check("omega", self.omega, 0.0, 1e6, lo_open=True)
         _check("phase", self.phase, -2 * math.pi, 2 * math.pi)
         _check_floor("floor", self.floor)
