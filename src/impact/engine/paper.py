@@ -19,7 +19,7 @@ from impact.engine import sampler as S
 from impact.engine.bundles import PaperCall
 from impact.engine.contact import STICK_VELOCITY
 from impact.engine.jitcache import compile_lock
-from impact.model.kinds import KINDS
+from impact.model.kinds import KINDS, kinds_with
 from impact.model.params import Protocol, System
 
 _WARM: set = set()
@@ -43,14 +43,14 @@ def ensure_compiled(kind: str, friction: bool = False) -> None:
 
 
 def ensure_sampler_compiled() -> None:
-    """Compile (or load) the paper loop's dense output (sampler.paper_samples, for the PID and the CID), under
-    compile_lock."""
+    """Compile (or load) the paper loop's dense output (sampler.paper_samples, for each kind the paper loop runs),
+    under compile_lock."""
     if "samples" in _WARM:
         return
-    for kind in ("cid", "pid"):
+    for kind in kinds_with("paper"):
         ensure_compiled(kind)  # the loop it calls, under the lock of its own
     with compile_lock("paper-samples", "the paper loop's dense output", fresh=(S.paper_samples,)):
-        for kind in ("cid", "pid"):
+        for kind in kinds_with("paper"):
             probe = System(kind, mu=0.01, beta=0.05, e=0.5, gap=1.0, rp=1.0 if KINDS[kind].spring else 0.0)
             dense_samples(param_vector(probe, 0.9, Protocol(periods=1.0, average_from=0.0)), pid_data(probe, 0.9),
                           np.zeros(4), FREE_FLIGHT, np.array([0.0, 0.5, 1.0]), 2, 1)
