@@ -63,6 +63,14 @@ def test_a_run_continues_from_its_final_state_on_either_loop():
         assert second.final_contacts == both.final_contacts
 
 
+def test_the_paper_loops_contact_code_decodes_to_the_state_it_encodes():
+    """Every (mode, side, sigma) a run can start from or end in survives the integer the paper loop carries it in."""
+    states = [(mode, side, sigma) for mode in (layout.MODE_FREE, layout.MODE_STUCK, layout.MODE_LOCKED,
+                                                layout.MODE_FLOOR) for side in (-1, 0, 1) for sigma in (-1, 0, 1)]
+    assert [paper_loop.decode_contact(paper_loop.contact_code(*s)) for s in states] == states
+    assert len({paper_loop.contact_code(*s) for s in states}) == len(states)
+
+
 def test_asking_for_peaks_moves_the_same_scene_to_the_scene_loop_and_the_physics_agrees():
     """At r = 1, g = 1 the steady state is an attractor (tests/test_scene.py's STABLE_CASES): a run forgets
     round-off, so the two exact loops agree to round-off over the paper's whole protocol."""

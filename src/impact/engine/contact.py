@@ -33,6 +33,14 @@ from impact.engine.layout import MODE_LOCKED
 #: relative velocity below which a rebound is treated as sticking, in units of the load's velocity scale
 #: (F0/K * omega for the paper's system); far below any resolved rebound
 STICK_VELOCITY = 1e-8
+
+
+def free_vibration_stick(q, v, omega1: float) -> float:
+    """A free vibration's stick velocity: STICK_VELOCITY in units of the velocity scale omega1 X of where it starts,
+    X its largest displacement or velocity over omega1 (both loops; 0 at rest)."""
+    return STICK_VELOCITY * omega1 * max(float(np.max(np.abs(q))), float(np.max(np.abs(v))) / omega1)
+
+
 _ZERO_TOL = 1e-10  # relative size below which a derivative counts as zero
 #: contact tolerance of both loops, relative to the size of the gap function: a unit within it of its wall is on
 #: it, a relative speed within it of the row's scale is zero

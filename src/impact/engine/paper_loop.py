@@ -353,9 +353,15 @@ def contact_code(mode, side, sigma):
     return mode + 10 * (side + 1) + 100 * (sigma + 1)
 
 
+def decode_contact(code):
+    """The contact state (mode, side, sigma) that contact_code made the integer of."""
+    return code % 10, (code % 100) // 10 - 1, code // 100 - 1
+
+
 # the kernels' copy; Python calls contact_code, so importing a module that only names a state loads no
 # compiled code (a cached load costs about 0.1 s, and plots and the workflow's start-up need none)
 encode_contact = njit(cache=True)(contact_code)
+_decode_contact = njit(cache=True, inline='always')(decode_contact)
 
 
 # ----------------------------------------------------------------------------
@@ -645,9 +651,7 @@ def _initial_contact(c, code_init, z, p, fric):
     """The contact state a run starts in, into c, from its code (encode_contact) and state: no gap locks the
     mass; a state just after an impact (a closed-form orbit) escapes its wall; with friction, a mass moving with
     the floor rests on it, and one that moves relative to it slides."""
-    c[C_SIGMA] = code_init // 100 - 1
-    c[C_SIDE] = (code_init % 100) // 10 - 1
-    c[C_MODE] = code_init % 10
+    c[C_MODE], c[C_SIDE], c[C_SIGMA] = _decode_contact(code_init)
     d = p[L.P_GAP]
     if d == 0.0:
         c[C_MODE] = L.MODE_LOCKED

@@ -29,9 +29,9 @@ import numpy as np
 from impact.engine import layout as L
 from impact.engine import paper
 from impact.engine import paper_loop as K
-from impact.engine.contact import STICK_VELOCITY
+from impact.engine.contact import free_vibration_stick
 from impact.engine.diagnostics import ENERGY_TERMS, read_diagnostics
-from impact.engine.scenes import MODE_CODES, PEAK_GROUPS, SceneResult, contacts_of, simulate_scene
+from impact.engine.scenes import MODE_CODES, PEAK_GROUPS, EndsInState, SceneResult, contacts_of, simulate_scene
 from impact.model.params import ParameterError, Protocol, System, ipc_class, ipc_label
 from impact.model.scene import Harmonic, Scene, State, paper_scene_from_system
 
@@ -101,9 +101,15 @@ def _paper_start(system: System, scene: Scene) -> tuple[np.ndarray, int]:
     return np.array([x, xd, y, yd]), K.contact_code(MODE_CODES[c.mode], c.side, c.slide)
 
 
-def _paper_contact(code: int) -> tuple:
-    """The unit's Contact from the paper loop's code (paper_loop.contact_code)."""
-    return contacts_of([(code % 10, (code % 100) // 10 - 1, code // 100 - 1)])
+def _paper_result(scene: Scene, diagnostics: dict, z: np.ndarray, final_code: int, **measured) -> SceneResult:
+    """A paper loop's run as a SceneResult: what it measured given, the scene loop's peaks NaN (it has none), its
+    final state from (x, x', y, y') and its contact code (paper_loop.contact_code)."""
+    nan = math.nan
+    return SceneResult(
+        scene=scene, peak_roof_displacement=nan, peak_roof_displacement_time=nan, peak_roof_acceleration=nan,
+        peak_interstorey_drift=nan, peak_drifts=np.full(1, nan), peak_strokes=np.full(1, nan),
+        diagnostics=diagnostics, final_q=z[[0, 2]].copy(), final_v=z[[1, 3]].copy(), loop="paper",
+        final_contacts=contacts_of([K.decode_contact(int(final_code))]), **measured)
 
 
 def _run_paper(scene: Scene, system: System, measures: frozenset, record: int, times) -> SceneResult:
@@ -112,8 +118,8 @@ def _run_paper(scene: Scene, system: System, measures: frozenset, record: int, t
     z0, code = _paper_start(system, scene)
     p = paper.run_parameters(system, r, scene.t_end, scene.t_window, scene.max_events_per_period,
                              max_events=scene.event_budget)
-    if not system.force_ratio:  # a free vibration: the stick velocity scales with where it starts
-        p[L.P_VSTICK] = STICK_VELOCITY * float(np.max(np.abs(z0)))
+    if not system.force_ratio:
+        p[L.P_VSTICK] = free_vibration_stick(z0[[0, 2]], z0[[1, 3]], 1.0)  # the paper's units: omega1 = 1
     if "samples" in measures:
         return _sampled_paper_run(scene, system, p, z0, code, record, times)
     fric = np.array([system.nu * scene.gravity]) if system.nu > 0.0 else None
@@ -123,14 +129,9 @@ def _run_paper(scene: Scene, system: System, measures: frozenset, record: int, t
     rec = np.zeros((int(record), L.NREC))
     final = K.run(p, z0, int(code), paper.pid_data(system, r), fric, rec, diag, z_out)
     amp, span, complete = paper.window_amplitude(diag, scene.t_window)
-    nan = math.nan
-    return SceneResult(
-        scene=scene, peak_roof_displacement=nan, peak_roof_displacement_time=nan,
-        rms_roof_displacement=math.sqrt(diag[L.D_X2WIN] / span) if complete else nan,
-        peak_roof_acceleration=nan, peak_interstorey_drift=nan, peak_drifts=np.full(1, nan),
-        peak_strokes=np.full(1, nan), impacts=int(diag[L.D_IMPACTS]), diagnostics=read_diagnostics(diag),
-        final_q=z_out[[0, 2]].copy(), final_v=z_out[[1, 3]].copy(), records=_records(rec, diag),
-        amplitude=amp, window_span=float(span), loop="paper", final_contacts=_paper_contact(int(final)))
+    return _paper_result(scene, read_diagnostics(diag), z_out, final, impacts=int(diag[L.D_IMPACTS]),
+                         rms_roof_displacement=math.sqrt(diag[L.D_X2WIN] / span) if complete else math.nan,
+                         records=_records(rec, diag), amplitude=amp, window_span=float(span))
 
 
 def _sampled_paper_run(scene: Scene, system: System, p: np.ndarray, z0: np.ndarray, code: int, record: int,
@@ -151,16 +152,11 @@ def _sampled_paper_run(scene: Scene, system: System, p: np.ndarray, z0: np.ndarr
     diag = np.zeros(L.NDIAG)
     diag[L.D_IMPACTS] = impacts
     diag[L.D_CAP] = 1.0 if capped else 0.0
-    nan = math.nan
     diagnostics = read_diagnostics(diag)
-    diagnostics.update({key: nan for key in ENERGY_TERMS})
-    return SceneResult(
-        scene=scene, peak_roof_displacement=nan, peak_roof_displacement_time=nan, rms_roof_displacement=nan,
-        peak_roof_acceleration=nan, peak_interstorey_drift=nan, peak_drifts=np.full(1, nan),
-        peak_strokes=np.full(1, nan), impacts=impacts, diagnostics=diagnostics, final_q=z[[0, 2]].copy(),
-        final_v=z[[1, 3]].copy(), records={c: kept[:, i].copy() for i, c in enumerate(L.RECORD_COLUMNS)},
-        samples={"t": times, "q": zs[:, [0, 2]], "v": zs[:, [1, 3]]}, loop="paper",
-        final_contacts=_paper_contact(final))
+    diagnostics.update({key: math.nan for key in ENERGY_TERMS})
+    return _paper_result(scene, diagnostics, z, final, impacts=impacts, rms_roof_displacement=math.nan,
+                         records={c: kept[:, i].copy() for i, c in enumerate(L.RECORD_COLUMNS)},
+                         samples={"t": times, "q": zs[:, [0, 2]], "v": zs[:, [1, 3]]})
 
 
 def _records(rec: np.ndarray, diag: np.ndarray) -> dict | None:
@@ -223,7 +219,7 @@ def simulate(scene: Scene, measures=DEFAULT_MEASURES, *, record: int = 0, times=
 
 
 @dataclass
-class RunResult:
+class RunResult(EndsInState):
     """One run under the response protocol (model units): the amplitude over the window, its ratio to the bare
     structure's resonant amplitude, the impacts per forcing cycle (aipc) and their class, and where it ended."""
 
@@ -238,11 +234,6 @@ class RunResult:
     final_contacts: tuple = ()
     records: dict | None = field(default=None, repr=False)
     loop: str = "paper"
-
-    @property
-    def final(self) -> State:
-        """The State the run ended in: simulate_system(..., initial=run.final) continues it."""
-        return State(self.final_q, self.final_v, self.final_contacts)
 
     @property
     def final_state(self) -> np.ndarray:

@@ -27,7 +27,7 @@ from impact.engine.bundles import (
     UnitArrays,
     YieldArrays,
 )
-from impact.engine.contact import STICK_VELOCITY
+from impact.engine.contact import STICK_VELOCITY, free_vibration_stick
 from impact.engine.diagnostics import read_diagnostics
 from impact.engine.jitcache import compile_lock
 from impact.engine.scene_loop import run_scene
@@ -39,8 +39,17 @@ from impact.model.scene import Contact, Damper, ForceRecord, GroundMotion, Harmo
 CACHE_SLOTS = 16        # configurations whose eigen-data are kept at once
 
 
+class EndsInState:
+    """A run's result that ends in a State: its final_q, final_v and final_contacts."""
+
+    @property
+    def final(self) -> State:
+        """The State the run ended in: a Scene (or run.simulate_system) started from it continues the run."""
+        return State(self.final_q, self.final_v, self.final_contacts)
+
+
 @dataclass
-class SceneResult:
+class SceneResult(EndsInState):
     """Measures of one scene run, in the units the scene's building and load were given in: metres, seconds and
     m/s² for a building in SI (kg, N/m) under a GroundMotion in m/s² or a force in N; the paper's model units
     (M = K = 1, omega = 1) for its harmonic study."""
@@ -69,11 +78,6 @@ class SceneResult:
     storeys: "StoreyResponse | None" = None
     #: every unit's contact at the run's end (impact.model.scene.Contact), in Scene.unit_list() order
     final_contacts: tuple = ()
-
-    @property
-    def final(self) -> State:
-        """The state the run ended in: Scene(..., initial=result.final) continues it."""
-        return State(self.final_q, self.final_v, self.final_contacts)
 
     def as_json(self, units: str = "m") -> dict:
         out = {
@@ -248,15 +252,6 @@ def _initial_state(scene: Scene, floor: np.ndarray, gap: np.ndarray, kind: np.nd
     return q, np.zeros(nfull), mode, side
 
 
-def _free_vibration_scale(scene: Scene, mass: float, omega1: float) -> float:
-    """A free vibration's force scale for the stick velocity: the force M omega1^2 X that holds the building at the
-    initial State's displacement scale X (its largest displacement, or velocity over omega1); 0 at rest."""
-    if scene.initial is None:
-        return 0.0
-    x = max(max(map(abs, scene.initial.q)), max(map(abs, scene.initial.v)) / omega1)
-    return mass * omega1 ** 2 * x
-
-
 def _given_state(state: State, gap: np.ndarray):
     """A scene's initial State as the loop's start: a unit given 'floor' starts free, and the loop finds at once
     that its floor drags it (no relative velocity, friction), as it does for every unit at rest; a unit with a
@@ -326,12 +321,13 @@ def _scene_arrays(scene: Scene, peaks=PEAK_GROUPS, window: bool = True):
         scale = scene.load.amplitude
     else:
         scale = float(np.sum(np.abs(load_vec)) * np.max(np.abs(record)))
+    q0, v0, mode0, side0 = _initial_state(scene, floor, gap, kind, nf + len(mass))
     if scale == 0.0:
-        scale = _free_vibration_scale(scene, float(np.sum(mass_full)), omega1)
-    p[L.P_VSTICK] = STICK_VELOCITY * scale / (float(np.sum(mass_full)) * omega1) if scale > 0 else 0.0
+        p[L.P_VSTICK] = free_vibration_stick(q0, v0, omega1)
+    else:
+        p[L.P_VSTICK] = STICK_VELOCITY * scale / (float(np.sum(mass_full)) * omega1)
     p[L.P_REC_T0] = 0.0
     p[L.P_REC_DT] = rec_dt
-    q0, v0, mode0, side0 = _initial_state(scene, floor, gap, kind, nf + len(mass))
     return dict(model=SceneArrays(p, building, units, load_vec, monitors), springs=springs, fric=fric, harm=harm,
                 record=record, yld=_yield_arrays(scene), start=StartState(q0, v0, mode0, side0),
                 cache=_cache(nf + n_spring))
