@@ -22,12 +22,18 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from probe import scene_of  # noqa: E402
 
 from impact.engine.run import simulate  # noqa: E402
+from impact.model.kinds import KINDS  # noqa: E402
 from impact.model.params import ParameterError  # noqa: E402
 from impact.model.scene import Damper  # noqa: E402
 
 SEED, SCENES = 424242, 40
 SOFT = (0.01, 0.03, 0.1, 0.3)
 STIFF = (10.0, 30.0, 100.0, 300.0, 1000.0)
+
+
+def tuned(damper) -> bool:
+    """Whether the damper hangs on a spring tuned to the building (the registry's word, kinds.DamperKind.spring)."""
+    return KINDS[damper.kind].spring
 
 
 def tuned_scenes():
@@ -38,18 +44,18 @@ def tuned_scenes():
             scene, _ = scene_of(SEED, i - 1)
         except ParameterError:
             continue
-        if any(d.kind in ("tmd", "pid") for d in scene.dampers):
+        if any(map(tuned, scene.dampers)):
             found.append(scene)
     return found
 
 
 def soft(scene, t):
-    return replace(scene, dampers=tuple(replace(d, tuning=t) if d.kind in ("tmd", "pid") else d for d in scene.dampers))
+    return replace(scene, dampers=tuple(replace(d, tuning=t) if tuned(d) else d for d in scene.dampers))
 
 
 def stiff(scene, t):
     return replace(scene, dampers=tuple(Damper("tmd", mass=d.mass, tuning=t, damping=d.damping, floor=d.floor,
-                                               units=d.units) for d in scene.dampers if d.kind in ("tmd", "pid")))
+                                               units=d.units) for d in scene.dampers if tuned(d)))
 
 
 def main() -> None:
