@@ -537,6 +537,11 @@ OPEN_AT_SCALE = {
     # perfectly plastic storeys with two CIDs under a record (3.10e-9, the same on the tree before the refinement's
     # wider bound, so not of it)
     (462953072, 1899): "energy residual", (462953072, 1322): "energy residual",
+    # and the probe of 3381bba (seed 1796249627), besides 1540 (held above): a storey hardening at 2.5e-4 of its
+    # stiffness, no P-delta (572, -6.11e-9: the near-zero tangent, 2.5 times the floor of 1e-4 the model allows);
+    # P-delta with hardening 0, 0.0048 and 0.015 (1572, -1.47e-9; 1286, 1.17e-9; 2795, 1.62e-9)
+    (1796249627, 572): "energy residual", (1796249627, 1286): "energy residual",
+    (1796249627, 1572): "energy residual", (1796249627, 2795): "energy residual",
 }
 #: scenes the probe at scale found that the model now refuses by name: a PID or TMD tuned outside
 #: [MIN_TUNING, MAX_TUNING].  3038120592-2847 (energy to 3.7e-7) broke through its TMD of tuning 0.040 (alone on
