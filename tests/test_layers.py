@@ -243,13 +243,30 @@ def test_a_content_edit_changes_the_digest_of_exactly_the_scripts_that_reach_it(
     shutil.copytree(SRC / "impact", copy / "impact", ignore=shutil.ignore_patterns("__pycache__"))
     before = {s.stem: code_deps.library_digest(s, copy) for s in SCRIPTS.glob("*.py")}
     edited = copy / "impact" / "engine" / "contact.py"
-    edited.write_text(edited.read_text() + "\n# an edit\n")
+    edited.write_text(edited.read_text() + "\nAN_EDIT = 1\n")
     after = {s.stem: code_deps.library_digest(s, copy) for s in SCRIPTS.glob("*.py")}
     reaches = {s.stem for s in SCRIPTS.glob("*.py") if edited.resolve() in code_deps.library_files(s, copy)}
     assert {s for s in before if before[s] != after[s]} == reaches
     assert {"sweep_curve", "design_sweep", "continuation_curve", "ensemble_curve", "masri_check",
             "validation_cases", "numerics_work_precision_piece", "loads_damper", "robustness_design"} <= reaches
     assert not {"figure", "report", "tmd_optimum", "paper_vs_reproduced"} & reaches
+
+
+def test_an_edit_of_comments_and_layout_alone_reruns_no_job(tmp_path):
+    """A comment or a blank line cannot change a result, so it changes no script's digest; a docstring can be
+    printed, so it does."""
+    import shutil
+
+    copy = tmp_path / "src"
+    shutil.copytree(SRC / "impact", copy / "impact", ignore=shutil.ignore_patterns("__pycache__"))
+    script = SCRIPTS / "sweep_curve.py"
+    edited = copy / "impact" / "engine" / "contact.py"
+    before = code_deps.library_digest(script, copy)
+    source = edited.read_text()
+    edited.write_text("# a comment\n\n" + source.replace("\n\n\n", "\n\n\n\n") + "\n# an edit\n")
+    assert code_deps.library_digest(script, copy) == before
+    edited.write_text(source.replace('"""', '"""A docstring edit. ', 1))
+    assert code_deps.library_digest(script, copy) != before
 
 
 def test_the_rules_take_the_damper_kinds_from_the_model():

@@ -289,7 +289,7 @@ def test_an_engine_edit_reruns_exactly_the_jobs_whose_scripts_reach_it(smoke):
     """A one-line content edit of the engine's contact module: every job whose script reaches the file through
     its imports is outdated, every simulating stage among them; a job is outdated for its params (its library
     digest) only if its script reaches the file; the closed-form jobs are not outdated.  Touching a file
-    without changing it reruns nothing."""
+    without changing it, or adding a comment, reruns nothing."""
     from impact.outputs import code_deps
 
     contact = smoke / "src" / "impact" / "engine" / "contact.py"
@@ -297,7 +297,9 @@ def test_an_engine_edit_reruns_exactly_the_jobs_whose_scripts_reach_it(smoke):
     try:
         contact.touch()
         assert "nothing to be done" in _snakemake(smoke, "-n", "--configfile", "config/smoke.yaml").stdout.lower()
-        contact.write_text(original + "\n# a one-line edit\n")
+        contact.write_text(original + "\n# a comment alone\n")
+        assert "nothing to be done" in _snakemake(smoke, "-n", "--configfile", "config/smoke.yaml").stdout.lower()
+        contact.write_text(original + "\nA_ONE_LINE_EDIT = 1\n")
         out = _snakemake(smoke, "-n", "--configfile", "config/smoke.yaml").stdout
     finally:
         contact.write_text(original)

@@ -2,8 +2,9 @@
 
 Snakemake tracks a rule's script but not what the script imports.  The transitive closure of the ``impact``
 modules a script imports (read with :mod:`ast`, imports inside functions included, nothing executed) is the
-library code its results can depend on; a digest of those files' contents is a rule's ``library`` param, so an
-edit of any of them reruns exactly the jobs whose scripts reach it.  Data files that ship inside a package the
+library code its results can depend on; a digest of those files' syntax trees is a rule's ``library`` param, so an
+edit of any of them reruns exactly the jobs whose scripts reach it, and an edit of a comment or of the layout
+reruns none.  Data files that ship inside a package the
 closure imports from (the rig's schema) count as its code.
 """
 
@@ -111,4 +112,8 @@ def library_digest(script: str | Path, src: str | Path = SRC) -> str:
 
 @functools.cache
 def _file_digest(path: Path, version: tuple[int, int]) -> bytes:
+    """A module's syntax tree (no comments, blank lines or layout, which cannot change what it computes; its
+    docstrings count, since code may print them); any other file's bytes."""
+    if path.suffix == ".py":
+        return hashlib.sha256(ast.dump(ast.parse(path.read_bytes(), filename=str(path))).encode()).digest()
     return hashlib.sha256(path.read_bytes()).digest()

@@ -113,9 +113,6 @@ def curve_starts(cfg: dict, spec: dict) -> list:
 
 def run_curve(cfg: dict, spec: dict, gap_ratios=None, mode: str = "from_rest"):
     """All sweeps of one curve (one sweep mode), as a self-describing dataset."""
-    # imported here: the figures and tables import this module for its grids and names, and should not
-    # pay for the kernels, scipy and xarray (about 0.7 s of every such job's start)
-
     gaps = gap_grid(cfg) if gap_ratios is None else np.asarray(gap_ratios, dtype=float)
     r = freq_grid(cfg)
     proto_cfg = cfg["protocol"]
