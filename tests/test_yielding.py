@@ -198,6 +198,19 @@ def test_a_building_that_can_fall_over_needs_a_collapse_limit_and_a_near_zero_st
         _quake(flat, collapse_drift_ratio=0.1)
 
 
+def test_the_post_yield_stiffness_is_b_k_less_the_weight_each_storey_carries_over_its_height():
+    """Storey 1 carries both floors and the roof's damper, storey 2 the roof and its damper: b k - P/h each."""
+    b = Building.explicit([2e5, 1e5], [8e7, 5e7], storey_damping=[1e5, 1e5])
+    damper = Damper("cid", 3e3, gap=0.05, e=0.5)
+    scene = _quake(b.yielding(0.02, 0.1, storey_height=[4.0, 3.0], p_delta=True), dampers=(damper,),
+                   collapse_drift_ratio=0.1)
+    carried = np.array([2e5 + 1e5 + 3e3, 1e5 + 3e3]) * G_GRAV
+    np.testing.assert_allclose(scene.post_yield_stiffness(), 0.1 * np.array([8e7, 5e7]) - carried / [4.0, 3.0],
+                               rtol=1e-15)
+    assert _quake(b.yielding(0.02, 0.1)).post_yield_stiffness().tolist() == [8e6, 5e6]  # no P-delta: b k
+    assert _quake(b).post_yield_stiffness() is None
+
+
 def test_a_perfectly_plastic_storey_needs_damping_and_collapse_needs_heights():
     undamped = Building.explicit([1.0], [1.0], storey_damping=[0.0])
     with pytest.raises(ParameterError, match="hardening = 0 without P-delta"):

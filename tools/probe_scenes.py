@@ -65,7 +65,33 @@ def run_one(seed: int, index: int, share: float) -> dict:
         broke = [f"{type(exc).__name__}: {str(exc).splitlines()[0][:160]}"]
     return {"seed": seed, "index": index, "seconds": time.perf_counter() - started, "broke": broke,
             "storeys": scene.building.storeys, "dampers": [d.kind for d in scene.dampers],
-            "load": type(scene.load).__name__, "yielding": yielding}
+            "load": type(scene.load).__name__, "yielding": yielding, "tangent": smallest_tangent(scene)}
+
+
+def smallest_tangent(scene) -> float | None:
+    """The building's post-yield stiffness nearest zero, |b k - P/h| over k (None: its storeys do not yield): near
+    zero the exact flow loses digits (model.scene.MIN_TANGENT), so the probe sorts its yielding scenes by it."""
+    tangents = scene.post_yield_stiffness()
+    if tangents is None:
+        return None
+    return float(np.min(np.abs(tangents) / scene.building.storey_stiffness))
+
+
+#: the bands of `smallest_tangent` the report counts scenes and energy breaks in (0 exactly: a perfectly plastic
+#: storey without P-delta)
+TANGENT_BANDS = (0.0, 1e-4, 1e-3, 3e-3, 1e-2, 1e-1, np.inf)
+
+
+def by_tangent(runs: list[dict]) -> list[dict]:
+    """Yielding scenes that ran, per band of their smallest post-yield stiffness: how many, and how many broke the
+    energy balance."""
+    ran = [r for r in runs if r.get("tangent") is not None]
+    bands = [{"band": "0", "test": lambda t: t == 0.0}]
+    bands += [{"band": f"[{lo:g}, {hi:g})", "test": lambda t, lo=lo, hi=hi: lo <= t < hi and t > 0.0}
+              for lo, hi in zip(TANGENT_BANDS[:-1], TANGENT_BANDS[1:])]
+    return [{"band": b["band"], "scenes": sum(b["test"](r["tangent"]) for r in ran),
+             "energy_breaks": sum(b["test"](r["tangent"]) and any(x.startswith("energy") for x in r["broke"])
+                                  for r in ran)} for b in bands]
 
 
 def break_class(text: str) -> str:
@@ -192,7 +218,7 @@ def main(argv=None) -> int:
               "broken_scenes": sum(bool(r["broke"]) for r in runs), "classes": classes,
               "slowest": sorted(({"index": r["index"], "seconds": r["seconds"]} for r in runs),
                                 key=lambda r: -r["seconds"])[:10],
-              "median_seconds": float(np.median(seconds)), "runs": runs}
+              "median_seconds": float(np.median(seconds)), "by_tangent": by_tangent(runs), "runs": runs}
     args.out.write_text(json.dumps(report, indent=1) + "\n")
     print(f"seed {seed}: {len(runs)} scenes ({report['yielding_scenes']} yielding), {report['broken_scenes']} broke "
           f"a promise ({report['wall_seconds']:.0f} s; reproduce one with --reproduce {seed} INDEX "
@@ -201,6 +227,9 @@ def main(argv=None) -> int:
         print(f"  {c['scenes']:5d} ({c['per_thousand']:.1f} per thousand, {c['yielding']} yielding)  {name}")
         for w in c["worst"][:3]:
             print(f"          scene {w['index']}{' (yielding)' if w['yielding'] else ''}: {w['break']}")
+    print("  yielding scenes by their smallest post-yield stiffness |b k - P/h| / k: scenes, energy breaks")
+    for band in report["by_tangent"]:
+        print(f"    {band['band']:>14s}: {band['scenes']:5d}, {band['energy_breaks']}")
     print(f"written to {args.out}")
     return 0
 

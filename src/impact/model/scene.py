@@ -394,18 +394,28 @@ class Scene:
             carried[self.floor_index(d.floor)] += d.mass / d.units
         return np.cumsum(carried[::-1])[::-1] * self.gravity / b.storey_height
 
+    def post_yield_stiffness(self) -> np.ndarray | None:
+        """Every storey's stiffness on its yielding branch, b k - P/h (N/m), storey 1 first; None for a building
+        whose storeys do not yield."""
+        b = self.building
+        if b.yield_drift is None:
+            return None
+        return b.hardening * b.storey_stiffness - self.geometric_stiffness()
+
     def _check_tangents(self) -> None:
         """Refuse a storey whose elastic stiffness k - P/h, or post-yield stiffness b k - P/h, is near zero (a zero
         post-yield stiffness is allowed only without P-delta: b = 0, a perfectly plastic storey), and a building
         that can fall over (a negative post-yield stiffness) without a collapse limit to stop its run."""
         b = self.building
-        for i, (ki, gi) in enumerate(zip(b.storey_stiffness, self.geometric_stiffness()), start=1):
+        geometric = self.geometric_stiffness()
+        for i, (ki, gi) in enumerate(zip(b.storey_stiffness, geometric), start=1):
             if ki - gi < MIN_TANGENT * ki:
                 raise ParameterError(f"storey {i}: P-delta's P/h = {gi:.6g} N/m leaves its stiffness {ki:.6g} N/m "
                                      f"less than {MIN_TANGENT:g} of itself: the building cannot stand")
-            if b.yield_drift is None:
-                continue
-            tangent = b.hardening * ki - gi
+        tangents = self.post_yield_stiffness()
+        if tangents is None:
+            return
+        for i, (ki, gi, tangent) in enumerate(zip(b.storey_stiffness, geometric, tangents), start=1):
             if abs(tangent) < MIN_TANGENT * ki and not (tangent == 0.0 and gi == 0.0):
                 raise ParameterError(
                     f"hardening = {b.hardening!r} leaves storey {i} a post-yield stiffness b k - P/h of "
