@@ -17,8 +17,9 @@ that it keeps finding what the fixed 300 cannot.
 It prints, per class of break, how many scenes broke it and the worst few (seed and index, which is the
 reproducer: scene i of seed s is yielding if ``default_rng([s, i, 2]).random()`` is below the yielding share, and
 is drawn from ``numpy.random.default_rng([s, i, 1])`` if so, else from ``default_rng([s, i])``, so that a seed's
-elastic scenes are the ones it drew before yielding buildings existed), and writes them all to
-``--out`` (JSON).  A scene that runs past ``--timeout`` seconds is a break of its own ("over the time bound").
+elastic scenes are the ones it drew before yielding buildings existed), then its yielding scenes by their
+post-yield stiffness nearest zero (bands of |b k - P/h| / k, with the energy breaks in each: near zero the exact
+flow loses digits, docs/model.md), and writes them all to ``--out`` (JSON).  A scene that runs past ``--timeout`` seconds is a break of its own ("over the time bound").
 """
 
 from __future__ import annotations
@@ -87,7 +88,8 @@ def by_tangent(runs: list[dict]) -> list[dict]:
     energy balance."""
     ran = [r for r in runs if r.get("tangent") is not None]
     bands = [{"band": "0", "test": lambda t: t == 0.0}]
-    bands += [{"band": f"[{lo:g}, {hi:g})", "test": lambda t, lo=lo, hi=hi: lo <= t < hi and t > 0.0}
+    bands += [{"band": f"{'(' if lo == 0.0 else '['}{lo:g}, {hi:g})",
+               "test": lambda t, lo=lo, hi=hi: lo <= t < hi and t > 0.0}
               for lo, hi in zip(TANGENT_BANDS[:-1], TANGENT_BANDS[1:])]
     return [{"band": b["band"], "scenes": sum(b["test"](r["tangent"]) for r in ran),
              "energy_breaks": sum(b["test"](r["tangent"]) and any(x.startswith("energy") for x in r["broke"])

@@ -253,6 +253,9 @@ def _snap_rigid_modes(lam, n, count):
 #: own eigenpair's basin is the eigenvalue's bound beside it (_REFINE_NEIGHBOUR)
 _REFINE_REACH = 1e-2
 _REFINE_NEIGHBOUR = 0.1  # the largest move of an eigenvalue, as a fraction of its distance to the nearest other
+#: eigenvalues closer than this, relative to their size, are twins (identical units): the Newton step on either of
+#: a twin pair is singular, so the pair keeps the eigensolver's shapes
+_TWIN = 1e-6
 
 
 @njit(cache=True)
@@ -299,7 +302,7 @@ def _refine_modes(lam, vec, m, kr, cr, n, rigid):
         else:
             psi = vec[:n, k] / vec[np.argmax(np.abs(vec[:n, k])), k]
             nearest = _nearest_other(lam, k, n)
-            if nearest > 1e-6 * abs(lam[k]):  # a twin (identical units) makes the Newton step singular
+            if nearest > _TWIN * abs(lam[k]):
                 lam[k] = _newton_refined(lam[k], psi, m, kr, cr, n, _REFINE_NEIGHBOUR * nearest)
         for i in range(n):
             vec[i, k] = psi[i]
