@@ -19,7 +19,8 @@ reproducer: scene i of seed s is yielding if ``default_rng([s, i, 2]).random()``
 is drawn from ``numpy.random.default_rng([s, i, 1])`` if so, else from ``default_rng([s, i])``, so that a seed's
 elastic scenes are the ones it drew before yielding buildings existed), then its yielding scenes by their
 post-yield stiffness nearest zero (bands of |b k - P/h| / k, with the energy breaks in each: near zero the exact
-flow loses digits, docs/model.md), and writes them all to ``--out`` (JSON).  A scene that runs past ``--timeout`` seconds is a break of its own ("over the time bound").
+flow loses digits, docs/model.md), and writes them all to ``--out`` (JSON).  A scene that runs past ``--timeout``
+seconds is a break of its own ("over the time bound").
 """
 
 from __future__ import annotations

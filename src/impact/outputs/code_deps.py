@@ -4,8 +4,7 @@ Snakemake tracks a rule's script but not what the script imports.  The transitiv
 modules a script imports (read with :mod:`ast`, imports inside functions included, nothing executed) is the
 library code its results can depend on; a digest of those files' syntax trees is a rule's ``library`` param, so an
 edit of any of them reruns exactly the jobs whose scripts reach it, and an edit of a comment or of the layout
-reruns none.  Data files that ship inside a package the
-closure imports from (the rig's schema) count as its code.
+reruns none.  Data files that ship inside a package the closure imports from (the rig's schema) count as its code.
 """
 
 from __future__ import annotations
