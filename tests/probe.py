@@ -147,6 +147,16 @@ def scene_of(seed: int, index: int, share: float = YIELDING_SHARE) -> tuple[Scen
     return draw_scene(np.random.default_rng([seed, index]), reach=WIDE)
 
 
+def smallest_tangent(scene: Scene) -> float | None:
+    """The building's post-yield stiffness nearest zero, |b k - P/h| over k (None: its storeys do not yield): near
+    zero the exact flow loses digits (model.scene.MIN_TANGENT, docs/model.md), so the probe sorts its yielding
+    scenes by it."""
+    tangents = scene.post_yield_stiffness()
+    if tangents is None:
+        return None
+    return float(np.min(np.abs(tangents) / scene.building.storey_stiffness))
+
+
 def _sampled_peaks(scene: Scene, q: np.ndarray) -> np.ndarray:
     """The monitors' displacement rows (roof, drifts, first unit of each damper's stroke) over samples."""
     nf = scene.building.storeys

@@ -44,7 +44,14 @@ import numpy as np  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from probe import SAMPLES, YIELDING_SHARE, is_yielding, scene_of, violations  # noqa: E402 (the path above first)
+from probe import (  # noqa: E402 (the path above first)
+    SAMPLES,
+    YIELDING_SHARE,
+    is_yielding,
+    scene_of,
+    smallest_tangent,
+    violations,
+)
 
 from impact.engine.run import simulate  # noqa: E402
 from impact.engine.scenes import compile_scene_loops  # noqa: E402
@@ -68,15 +75,6 @@ def run_one(seed: int, index: int, share: float) -> dict:
     return {"seed": seed, "index": index, "seconds": time.perf_counter() - started, "broke": broke,
             "storeys": scene.building.storeys, "dampers": [d.kind for d in scene.dampers],
             "load": type(scene.load).__name__, "yielding": yielding, "tangent": smallest_tangent(scene)}
-
-
-def smallest_tangent(scene) -> float | None:
-    """The building's post-yield stiffness nearest zero, |b k - P/h| over k (None: its storeys do not yield): near
-    zero the exact flow loses digits (model.scene.MIN_TANGENT), so the probe sorts its yielding scenes by it."""
-    tangents = scene.post_yield_stiffness()
-    if tangents is None:
-        return None
-    return float(np.min(np.abs(tangents) / scene.building.storey_stiffness))
 
 
 #: the bands of `smallest_tangent` the report counts scenes and energy breaks in (0 exactly: a perfectly plastic
