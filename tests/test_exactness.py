@@ -505,6 +505,23 @@ HELD_AT_SCALE = {
     # to 3.0e-5 and a dense sample lay 9.6e-4 above its certified peak.  One step refines it (residual 3e-11); the
     # bound is now 1e-2, a step kept in its eigenpair's basin by the eigenvalue's bound beside its neighbour
     (1796249627, 1540): "energy residual",
+    # the near-zero class: a yielding building's state read off its rows, whose exponential and polynomial parts
+    # (kilometres beside a post-yield stiffness near zero) cancel to millimetres, kept their round-off at every
+    # segment's end.  It is now advanced mode by mode from itself (segment.flow_change; docs/model.md, "Near zero
+    # the flow loses digits"): 572 (hardening 2.5e-4, no P-delta) -6.1e-9 -> -1.8e-10; 1286, 1572, 2795 (P-delta,
+    # hardening 0.015, 0, 0.0048) 1.2e-9, -1.5e-9, 1.6e-9 -> -1.7e-11, 1.2e-10, -5.8e-11; 1899 (P-delta beside a
+    # CID) -1.6e-9 -> -2.4e-10; and perfectly plastic storeys beside dampers in micrometre gaps, 1322 and 908
+    # (3.1e-9, 2.6e-9 -> -1.2e-13, -2.0e-12), the same cause.  (Their sister 1420, one storey beside a unit in a gap
+    # of 1.2e-10 m, balances to 6e-13 but ends at its event budget, flagged, as it did before: too slow for the
+    # suite.)  And 1178 (10 storeys with P-delta, the weakest keeping 0.54 % of its stiffness, 0.149 rad/s), whose
+    # load's work was still integrated term by term from the rows (-1.9e-6 before the dissipation's ramp form, then
+    # 1.4e-9): -1.3e-9 with the state advanced from itself, -8.8e-11 with the work in the ramp form from the
+    # state's velocities as well (modal.integrate_modal's from_state, the dissipation's form)
+    (868342599, 1178): "energy residual",
+    (1796249627, 572): "energy residual", (1796249627, 1286): "energy residual",
+    (1796249627, 1572): "energy residual", (1796249627, 2795): "energy residual",
+    (462953072, 1899): "energy residual", (462953072, 1322): "energy residual",
+    (3778667076, 908): "energy residual",
 }
 #: ... and those that still break it: issue 42's open classes.  Strict: the day a promise holds, its test fails,
 #: and the scene moves above.  (Scenes that ran past 60 s or to the event cap, as 2067450001-2283 does, are too slow
@@ -517,13 +534,13 @@ OPEN_AT_SCALE = {
     # With the dissipation in the ramp form, the scene balances to -3.0e-7, and its TMD alone (one unit) to -9.1e-8:
     # a different cause, the motion itself, whose load work moves by 1.1e-7 from one OpenBLAS kernel set to another
     # (-9.1e-8, +4.6e-9, -9.0e-8 under Haswell, Sandybridge, SkylakeX): the TMD's modes beside the soft storey read
-    # through an ill-conditioned eigenbasis (docs/model.md, "Energy balance")
+    # through an ill-conditioned eigenbasis (docs/model.md, "Energy balance").  With its state advanced from itself
+    # (segment.flow_change, as every building's with P-delta) and its load's work in the ramp form, -3.3e-8
     (2572387895, 2905): "energy residual",
-    # the class on yielding buildings with P-delta, found by the probe of 5d7fbde: a 10-storey building whose weakest
-    # storey keeps 0.54 % of its stiffness under gravity (fundamental 0.149 rad/s), energy to -1.94e-6 (1.4e-9 with
-    # the dissipation in the ramp form); an 8-storey perfectly plastic one keeping 2.3 % (0.27 rad/s), 2.2e-8 (now
-    # within 1e-9), and a dense sample 2.5e-8 above a certified peak, as 2905's
-    (868342599, 1178): "energy residual", (868342599, 2854): "sample above a certified peak",
+    # the class on yielding buildings with P-delta, found by the probe of 5d7fbde (with 1178, held above): an 8-storey
+    # perfectly plastic building keeping 2.3 % of its stiffness under gravity (0.27 rad/s), energy 2.2e-8 (now within
+    # 1e-9), and a dense sample 2.6e-8 above a certified peak, as 2905's
+    (868342599, 2854): "sample above a certified peak",
     # found by the probe of 86357c9 (and the same on 153eeac): one storey under El Centro with two TMDs and a PID; the
     # third damper, a TMD of twelve identical units tuned to 0.104 with 11.6 % of the building's mass, has its stroke
     # sampled 2.4e-9 above its certified peak (0.0274 m): the soft-mode class in a stroke's row
@@ -532,20 +549,6 @@ OPEN_AT_SCALE = {
     # broken): two soft storeys (1 rad/s) with three TMDs on floor 1, one tuned to 0.15 with 14 % of the mass, one
     # of nine identical units; a sample 1.6e-9 above its certified peak
     (1241593810, 438): "sample above a certified peak",
-    # found by the probe of e13082a (seed 462953072, 3,000 scenes), both yielding and both just past the bar: 1899,
-    # hardening storeys with P-delta under Northridge beside a CID (-1.61e-9, the P-delta class of 1178); 1322, five
-    # perfectly plastic storeys with two CIDs under a record (3.10e-9, the same on the tree before the refinement's
-    # wider bound, so not of it)
-    (462953072, 1899): "energy residual", (462953072, 1322): "energy residual",
-    # and the probe of 3381bba (seed 1796249627), besides 1540 (held above): a storey hardening at 2.5e-4 of its
-    # stiffness, no P-delta (572, -6.11e-9: the near-zero tangent, 2.5 times the floor of 1e-4 the model allows);
-    # P-delta with hardening 0, 0.0048 and 0.015 (1572, -1.47e-9; 1286, 1.17e-9; 2795, 1.62e-9)
-    (1796249627, 572): "energy residual", (1796249627, 1286): "energy residual",
-    (1796249627, 1572): "energy residual", (1796249627, 2795): "energy residual",
-    # and the probe of 2d2804c (seed 3778667076, 3,000 scenes, 804 yielding), its only breaks: 1322's class, perfectly
-    # plastic storeys without P-delta beside dampers in gaps of nanometres striking tens of thousands of times (908:
-    # four storeys under a force record, 41,088 impacts, 2.55e-9; 1420: one storey, 799,165 impacts, 2.23e-9)
-    (3778667076, 908): "energy residual", (3778667076, 1420): "energy residual",
 }
 #: scenes the probe at scale found that the model now refuses by name: a PID or TMD tuned outside
 #: [MIN_TUNING, MAX_TUNING].  3038120592-2847 (energy to 3.7e-7) broke through its TMD of tuning 0.040 (alone on
@@ -587,23 +590,6 @@ def test_a_scene_the_probe_at_scale_found_keeps_its_promise(seed_index, promise)
 
     broken = [v for v in _probe_violations(*scene_of(*seed_index)) if v.startswith(promise)]
     assert broken == []
-
-
-def test_the_open_energy_breaks_on_yielding_storeys_sit_near_a_zero_post_yield_stiffness():
-    """docs/model.md ("Near zero the flow loses digits"), held: every open energy break that its four probes found
-    on a building whose storeys yield with a nonzero post-yield stiffness has one between 2.0e-4 k and 1.5e-3 k
-    (the older probes' 2905 and 1178 are soft elastic storeys, another class)."""
-    from probe import scene_of, smallest_tangent
-
-    nearest = {}
-    for seed_index, promise in OPEN_AT_SCALE.items():
-        if seed_index[0] not in (2954474261, 1796249627, 462953072, 2813630187) or promise != "energy residual":
-            continue
-        tangent = smallest_tangent(scene_of(*seed_index)[0])
-        if tangent:  # a yielding building, none of whose storeys is perfectly plastic
-            nearest[seed_index] = tangent
-    assert len(nearest) == 5
-    assert 2.0e-4 <= min(nearest.values()) and max(nearest.values()) <= 1.5e-3, nearest
 
 
 @pytest.mark.parametrize("seed_index, value", sorted(REFUSED_AT_SCALE.items()), ids=_at_scale_ids(REFUSED_AT_SCALE))

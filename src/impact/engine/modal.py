@@ -255,13 +255,15 @@ def square_integral(c, p, wt, pair, single, big_t):
 
 
 @njit(cache=True, inline='always')
-def integrate_modal(w, s, n, tau, units, record, r0, r1):
+def integrate_modal(w, s, n, tau, units, record, r0, r1, from_state):
     """Exact work of a record load, viscous dissipation and stuck time over [0, tau], from the modal tables.
 
     w.wc: build_segment's scratch, with the modal amplitudes w in wc[2n:4n]; w.v: the state's velocities at the
     segment's start; cu1: scratch of the reduced size; wt: the segment's mode weights (mode_weights), which halve
     the sums over k; single, ramp: integral_tables and ramp_tables over tau; pu: (2, NPOLY) scratch; all of them
-    fields of w (bundles.SegmentWork).
+    fields of w (bundles.SegmentWork).  from_state: the load's work in the ramp form too, from the state's
+    velocities (a yielding building's, whose state is advanced from itself: segment.flow_change); an elastic
+    building's is taken term by term, as it always was, so that its numbers stay what they were.
     """
     cu1, wt, mode, load_vec, P, pu, diag = w.cu1, w.wt, w.mode, w.load_vec, w.P, w.pu, w.diag
     ramp, single, gvis, lmod, lam, vec, cred = w.ramp, w.single, w.gvis, w.lmod, w.lam, w.vec, w.damping
@@ -270,10 +272,13 @@ def integrate_modal(w, s, n, tau, units, record, r0, r1):
     if tau > 0.0:
         if record is not None:
             # work: f = r0 + r1 tau against l^T v, the modal part, then the polynomial parts of every row
+            # (from_state: l^T v = l^T v0 + sum_k lmod_k w_k (exp(kap_k tau) - 1) + the rows' higher powers, the
+            # ramp form, whose terms are the size of the velocity's change, as the dissipation's below)
+            m0 = NPOLY if from_state else 0
             acc = 0.0 + 0.0j
             for k in range(2 * n):
                 if wt[k] != 0.0:
-                    acc += wt[k] * lmod[s, k] * wc[W + k] * (r0 * single[k, 0] + r1 * single[k, 1])
+                    acc += wt[k] * lmod[s, k] * wc[W + k] * (r0 * single[k, m0] + r1 * single[k, m0 + 1])
             for k in range(NPOLY):
                 pu[0, k] = 0.0
                 pu[1, k] = 0.0
@@ -282,7 +287,7 @@ def integrate_modal(w, s, n, tau, units, record, r0, r1):
             for i in range(P.shape[0]):
                 li = load_vec[i]
                 if li != 0.0:
-                    pu[0, 0] += li * P[i, 1]
+                    pu[0, 0] += li * (v[i] if from_state else P[i, 1])
                     pu[0, 1] += li * 2.0 * P[i, 2]
                     pu[0, 2] += li * 3.0 * P[i, 3]
             diag[D_WORK] += acc.real + poly_integral(pu[0], pu[1], tau)

@@ -146,6 +146,7 @@ from impact.engine.segment import (
     deriv_at0,
     derivative_row,
     energy,
+    flow_change,
     int_prod,
     int_prod_ramp,
     integral_tables,
@@ -156,6 +157,7 @@ from impact.engine.segment import (
     state_from_exp,
     storey_drift,
     storey_gravity,
+    take_flow_state,
 )
 
 _ROUND_TOL = 1e-13  # 450 eps: the round-off of a difference of rows, relative to their terms' size
@@ -618,8 +620,8 @@ def grow_powers(kap, kpow):
 def integrate_segment(w, tau, building, units, springs, harm, record, load_at):
     """Exact work of the load, viscous dissipation and stuck time over [0, tau] (tables: integral_tables);
     load_at: (theta0, r0, r1), the load at the segment's start (segment_load).  Without a harmonic load the
-    dissipation's products of velocity rows are taken in the ramp form (segment.ramp_tables), from the state's
-    velocities."""
+    load's work and the dissipation's products of velocity rows are taken in the ramp form (segment.ramp_tables),
+    from the state's velocities."""
     kap, C, P, mode, load_vec, pair, single, diag = w.kap, w.C, w.P, w.mode, w.load_vec, w.pair, w.single, w.diag
     ramp, v = w.ramp, w.v
     cv, pv, cu, pu = w.cv, w.pv, w.cu, w.pu
@@ -653,7 +655,15 @@ def integrate_segment(w, tau, building, units, springs, harm, record, load_at):
     if record is not None:
         pu[1, 0] = r0
         pu[1, 1] = r1
-    diag[D_WORK] += int_prod(tau, pair, single, cu[0], pu[0], cu[1], pu[1])
+    if harm is None:
+        # in the ramp form, from the state's velocities, as the dissipation below (only a yielding building's
+        # segments come here under a record: integrate_modal's from_state)
+        lv0 = 0.0
+        for i in range(nfull):
+            lv0 += load_vec[i] * v[i]
+        diag[D_WORK] += int_prod_ramp(tau, ramp, single, lv0, cu[0], pu[0], r0, cu[1], pu[1])
+    else:
+        diag[D_WORK] += int_prod(tau, pair, single, cu[0], pu[0], cu[1], pu[1])
     # viscous dissipation: the building's damping, then the units' dashpots
     visc = 0.0
     for a in range(nf):
@@ -1193,17 +1203,22 @@ def segment_load(p, record, harm, t, t_end):
 
 
 @njit(cache=True, inline='always')
-def integrate_energy(w, s, n, tau, building, units, springs, harm, record, load_at):
-    """The energy terms over the segment: from the modal tables under a record, from the rows under a harmonic."""
+def integrate_energy(w, s, n, tau, building, units, springs, harm, record, load_at, yielding):
+    """The energy terms over the segment: from the modal tables under a record, from the rows under a harmonic;
+    yielding: the building's storeys can yield (its load's work is taken from the state, integrate_modal)."""
     if harm is None:
-        integrate_modal(w, s, n, tau, units, record, load_at[1], load_at[2])
+        integrate_modal(w, s, n, tau, units, record, load_at[1], load_at[2], yielding)
     else:
         integrate_segment(w, tau, building, units, springs, harm, record, load_at)
 
 
 @njit(cache=True, inline='always')
-def move_to_end(w, building, units, springs, fric, yld, tau):
-    """The state at the segment's end, the friction and plastic work on the way, and the largest stored energy."""
+def move_to_end(w, building, units, springs, fric, yld, tau, s, harmonic, theta0, omega):
+    """The state at the segment's end, the friction and plastic work on the way, and the largest stored energy.
+
+    A yielding building's state is advanced mode by mode from itself (segment.flow_change), not read off the rows,
+    whose parts beside a post-yield stiffness near zero are far larger than the motion; an elastic building's
+    from the rows, as it always was."""
     mode, sigma, kap, ek, C, P, q, v = w.mode, w.sigma, w.kap, w.ek, w.C, w.P, w.q, w.v
     s_before, diag = w.s_before, w.diag
     nf = building.mass.shape[0]
@@ -1211,7 +1226,11 @@ def move_to_end(w, building, units, springs, fric, yld, tau):
     if fric is not None:
         for j in range(mode.shape[0]):
             s_before[j] = q[nf + j] - q[ufloor[j]]
+    if yld is not None:
+        flow_change(w, s, tau, harmonic, theta0)
     state_from_exp(kap, ek, C, P, tau, q, v)
+    if yld is not None:
+        take_flow_state(w, s, tau, harmonic, theta0, omega, units, springs, nf)
     if fric is not None:
         for j in range(mode.shape[0]):
             if mode[j] == MODE_FREE and fric[j] > 0.0:
@@ -1415,7 +1434,8 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
             # once the step is known; a harmonic load's rows have no ramp and integrate term by term
             ramp_tables(kap, ek, tau, ramp, single)
         if yld is None or key >> nu == 0:
-            integrate_energy(w, s, n, tau, building, units, springs, harm, record, (theta0, r0, r1))
+            integrate_energy(w, s, n, tau, building, units, springs, harm, record, (theta0, r0, r1),
+                             yld is not None)
         else:
             # a storey yielding: the rows integrate.  A zero mode's particular velocity is not constant, which the
             # modal tables assume; and beside a stiff pendulum the tables lost 3e-9 of a probe scene's energy
@@ -1424,7 +1444,7 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
         monitor_modal(w, s, n, tau, t, t_square, monitors, (r0, r1), harm is not None, yld is not None)
         if its < ts.shape[0]:
             its = sample_segment(kap, C, P, t, tau, ts, its, samples, qs, vs)
-        move_to_end(w, building, units, springs, fric, yld, tau)
+        move_to_end(w, building, units, springs, fric, yld, tau, s, harm is not None, theta0, omega)
         t = t_next if not event else t + tau
         for j in range(nu):
             if escape[j] != 0 and not _still_leaving(j, nf, units, mode, escape, q, v):

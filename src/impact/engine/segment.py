@@ -187,6 +187,82 @@ def state_from_exp(kap, ek, C, P, tau, q, v):
         v[i] = dx + p[1] + tau * (2.0 * p[2] + 3.0 * tau * p[3])
 
 
+@njit(cache=True, inline='always')
+def flow_change(w, s, tau, harmonic, theta0):
+    """The change of the reduced state over [0, tau] of the segment build_segment set up in slot s, each mode
+    advanced from the state itself: eta(tau) - eta(0) = (lam eta(0) + a) phi1 + b phi2, with a + b t the mode's
+    share of the load, phi1 the integral over [0, tau] of exp(lam u) and phi2 that of exp(lam u) (tau - u).
+
+    The rows reach the same state through a particular solution of the load over the mode's eigenvalue, and its
+    square for the load's slope: beside a storey yielding with a post-yield stiffness near zero these are
+    kilometres in a segment that moves millimetres, and their round-off, left in the state at every segment's
+    end, walked the energy balance to 1e-8 (docs/model.md, "Near zero the flow loses digits").  Here every term
+    is of the size of the change it makes.  Written into w.wf: the state less a harmonic load's particular
+    solution at [2n, 4n) (positions, then velocities), its change at [4n, 6n); wf[:2n] holds the load (g0, g1)
+    as build_segment left it.
+    """
+    n = w.size[s]
+    lam, vec, vinv, mred, fidx, zc, wf, ek, q, v = w.lam, w.vec, w.vinv, w.mass, w.dof, w.forced, w.wf, w.ek, w.q, w.v
+    Y0, DX = 2 * n, 4 * n  # wf: g0 | g1 | the state | its change
+    ph = np.exp(1j * theta0)
+    for i in range(n):
+        full = fidx[s, i]
+        wf[Y0 + i] = q[full]
+        wf[Y0 + n + i] = v[full]
+        if harmonic:
+            wf[Y0 + i] -= (zc[s, i] * ph).imag
+            wf[Y0 + n + i] -= (zc[s, n + i] * ph).imag
+    for i in range(2 * n):
+        wf[DX + i] = 0.0
+    for k in range(2 * n):
+        a, b = _modal_load(n, s, k, vinv, mred, wf)
+        eta = 0.0 + 0.0j
+        for l in range(2 * n):
+            eta += vinv[s, k, l] * wf[Y0 + l]
+        lk = lam[s, k]
+        d = (lk * eta + a) * _phi0(lk, tau, ek[k]) + b * _phi2(lk, tau, ek[k])
+        for i in range(2 * n):
+            wf[DX + i] += (vec[s, i, k] * d).real
+
+
+@njit(cache=True, inline='always')
+def take_flow_state(w, s, tau, harmonic, theta0, omega, units, springs, nf):
+    """The state at tau from flow_change, written over what the rows gave: the reduced degrees of freedom, the
+    units their floor holds (its state and their offset, as their rows are the floor's), and identical spring
+    units given one row (_copy_identical_rows) the same state, bit for bit."""
+    n = w.size[s]
+    fidx, zc, wf, q, v, mode, offset, C, P = w.dof, w.forced, w.wf, w.q, w.v, w.mode, w.offset, w.C, w.P
+    Y0, DX = 2 * n, 4 * n
+    ph = np.exp(1j * (theta0 + omega * tau))
+    for i in range(n):
+        full = fidx[s, i]
+        q[full] = wf[Y0 + i] + wf[DX + i]
+        v[full] = wf[Y0 + n + i] + wf[DX + n + i]
+        if harmonic:
+            q[full] += (zc[s, i] * ph).imag
+            v[full] += (zc[s, n + i] * ph).imag
+    ufloor = units.floor
+    for j in range(mode.shape[0]):
+        if mode[j] != MODE_FREE:
+            q[nf + j] = q[ufloor[j]] + offset[j]
+            v[nf + j] = v[ufloor[j]]
+        elif j > 0 and units.kind[j] & UNIT_SPRING and mode[j - 1] == MODE_FREE and _same_row(C, P, nf + j - 1, nf + j):
+            q[nf + j] = q[nf + j - 1]
+            v[nf + j] = v[nf + j - 1]
+
+
+@njit(cache=True, inline='always')
+def _same_row(C, P, a, b):
+    """Whether rows a and b are one row, bit for bit."""
+    for k in range(C.shape[1]):
+        if C[a, k] != C[b, k]:
+            return False
+    for k in range(P.shape[1]):
+        if P[a, k] != P[b, k]:
+            return False
+    return True
+
+
 # ----------------------------------------------------------------------------
 # configurations: assembly and eigen-data, cached
 # ----------------------------------------------------------------------------
@@ -619,6 +695,16 @@ def _storey_constants(yld, q, wf, g0):
 
 
 @njit(cache=True, inline='always')
+def _modal_load(n, s, k, vinv, mred, wf):
+    """Mode k's share (a, b) of the reduced load g0 + g1 tau that build_segment left in wf[:n] and wf[n:2n]."""
+    a = 0.0 + 0.0j
+    b = 0.0 + 0.0j
+    for r in range(n):
+        a += vinv[s, k, n + r] * (wf[r] / mred[s, r])
+        b += vinv[s, k, n + r] * (wf[n + r] / mred[s, r])
+    return a, b
+
+@njit(cache=True, inline='always')
 def _modal_particular(n, s, lam, vec, vinv, mred, wf):
     """The particular solution of M q'' + C q' + K q = g0 + g1 tau through the modes, for any K (a singular one too).
 
@@ -626,17 +712,13 @@ def _modal_particular(n, s, lam, vec, vinv, mred, wf):
     -(a + b / lam) / lam - b tau / lam, or a tau + b tau^2 / 2 for a zero mode.  Written into
     wf: the positions at tau = 0 (QP, 3n), the velocities at 0 (U1, 2n) and the tau^2 coefficients (TMP, 4n).
     """
-    G0, G1, U1, QP, TMP = 0, n, 2 * n, 3 * n, 4 * n
+    U1, QP, TMP = 2 * n, 3 * n, 4 * n  # after g0, g1 (_modal_load)
     for i in range(n):
         wf[U1 + i] = 0.0
         wf[QP + i] = 0.0
         wf[TMP + i] = 0.0
     for k in range(2 * n):
-        a = 0.0 + 0.0j
-        b = 0.0 + 0.0j
-        for r in range(n):
-            a += vinv[s, k, n + r] * (wf[G0 + r] / mred[s, r])
-            b += vinv[s, k, n + r] * (wf[G1 + r] / mred[s, r])
+        a, b = _modal_load(n, s, k, vinv, mred, wf)
         lk = lam[s, k]
         gamma = 0.0 + 0.0j
         if lk == 0.0:
@@ -706,6 +788,26 @@ def _phi0(z, big_t, ez):
             acc = 1.0 + zt * acc * _RECIP[n + 1]
         return acc * big_t
     return (ez - 1.0) / z
+
+
+#: terms of _phi2's series: at |z T| = _RAMP_SERIES the 25th is 2^25 / 27! = 3e-21 of the first
+_PHI2_TERMS = 25
+
+
+@njit(cache=True)
+def _phi2(z, big_t, ez):
+    """Integral over [0, T] of exp(z u) (T - u) du, (ez - 1 - z T) / z^2; ez = exp(z T).
+
+    Below |z T| = _RAMP_SERIES by its power series, T^2 sum_n (zT)^n / (n + 2)!, by Horner: the closed form loses
+    eps / |z T|^2 to cancellation, and a slow mode sits at |z T| of 1e-3 on a record's sample step.
+    """
+    zt = z * big_t
+    if zt.real * zt.real + zt.imag * zt.imag < _RAMP_SERIES * _RAMP_SERIES:
+        acc = 1.0 + 0.0j
+        for n in range(_PHI2_TERMS, 0, -1):
+            acc = 1.0 + zt * acc * _RECIP[n + 2]
+        return 0.5 * acc * big_t * big_t
+    return (ez - 1.0 - zt) / (z * z)
 
 
 @njit(cache=True)

@@ -36,9 +36,10 @@ from impact.model.params import (
 )
 
 #: a storey's post-yield stiffness b k - P/h must be zero or at least this fraction of k away from it: near zero its
-#: mode's particular solution splits into an exponential and a polynomial of size 1/lam^2 that cancel.  Measured
+#: mode's particular solution splits into an exponential and a polynomial of size 1/lam^2 that cancel, which the
+#: state's own advance (engine.segment.flow_change) keeps out of the state but not out of the rows.  Measured
 #: (tests/test_yielding.py, tools/probe_scenes.py): at 8e-4 k the flow matches an independent solution to 1e-12,
-#: at 7.4e-6 k a probe scene's energy balance lost 1.6e-7
+#: at 7.4e-6 k a probe scene's energy balance lost 1.6e-7 with the state read off the rows
 MIN_TANGENT = 1e-4
 
 #: a scene's event budget by default, over its degrees of freedom (storeys and units), since an event costs more
