@@ -199,28 +199,33 @@ def flow_change(w, s, tau, harmonic, theta0):
     end, walked the energy balance to 1e-8 (docs/model.md, "Near zero the flow loses digits").  Here every term
     is of the size of the change it makes.  Written into w.wf: the state less a harmonic load's particular
     solution at [2n, 4n) (positions, then velocities), its change at [4n, 6n); wf[:2n] holds the load (g0, g1)
-    as build_segment left it.
+    as build_segment left it; w.wc[:2n] is scratch (each mode's change).
     """
     n = w.size[s]
-    lam, vec, vinv, mred, fidx, zc, wf, ek, q, v = w.lam, w.vec, w.vinv, w.mass, w.dof, w.forced, w.wf, w.ek, w.q, w.v
-    Y0, DX = 2 * n, 4 * n  # wf: g0 | g1 | the state | its change
-    ph = np.exp(1j * theta0)
+    lam, vec, vinv, mred, fidx, zc, wf, wc, ek, q, v = (w.lam, w.vec, w.vinv, w.mass, w.dof, w.forced, w.wf, w.wc,
+                                                        w.ek, w.q, w.v)
+    Y0, DX = 2 * n, 4 * n  # wf: g0 | g1 | the state | its change, which first holds g0 and g1 over the masses
     for i in range(n):
         full = fidx[s, i]
         wf[Y0 + i] = q[full]
         wf[Y0 + n + i] = v[full]
-        if harmonic:
+    if harmonic:
+        ph = np.exp(1j * theta0)
+        for i in range(n):
             wf[Y0 + i] -= (zc[s, i] * ph).imag
             wf[Y0 + n + i] -= (zc[s, n + i] * ph).imag
-    for i in range(2 * n):
-        wf[DX + i] = 0.0
+    _load_over_mass(n, s, mred, wf, DX)
     for k in range(2 * n):
-        a, b = _modal_load(n, s, k, vinv, mred, wf)
+        a, b = _modal_load(n, s, k, vinv, wf, DX)
         eta = 0.0 + 0.0j
         for l in range(2 * n):
             eta += vinv[s, k, l] * wf[Y0 + l]
         lk = lam[s, k]
-        d = (lk * eta + a) * _phi0(lk, tau, ek[k]) + b * _phi2(lk, tau, ek[k])
+        wc[k] = (lk * eta + a) * _phi0(lk, tau, ek[k]) + b * _phi2(lk, tau, ek[k])
+    for i in range(2 * n):
+        wf[DX + i] = 0.0
+    for k in range(2 * n):
+        d = wc[k]
         for i in range(2 * n):
             wf[DX + i] += (vec[s, i, k] * d).real
 
@@ -233,12 +238,14 @@ def take_flow_state(w, s, tau, harmonic, theta0, omega, units, springs, nf):
     n = w.size[s]
     fidx, zc, wf, q, v, mode, offset, C, P = w.dof, w.forced, w.wf, w.q, w.v, w.mode, w.offset, w.C, w.P
     Y0, DX = 2 * n, 4 * n
-    ph = np.exp(1j * (theta0 + omega * tau))
     for i in range(n):
         full = fidx[s, i]
         q[full] = wf[Y0 + i] + wf[DX + i]
         v[full] = wf[Y0 + n + i] + wf[DX + n + i]
-        if harmonic:
+    if harmonic:
+        ph = np.exp(1j * (theta0 + omega * tau))
+        for i in range(n):
+            full = fidx[s, i]
             q[full] += (zc[s, i] * ph).imag
             v[full] += (zc[s, n + i] * ph).imag
     ufloor = units.floor
@@ -695,14 +702,24 @@ def _storey_constants(yld, q, wf, g0):
 
 
 @njit(cache=True, inline='always')
-def _modal_load(n, s, k, vinv, mred, wf):
-    """Mode k's share (a, b) of the reduced load g0 + g1 tau that build_segment left in wf[:n] and wf[n:2n]."""
+def _load_over_mass(n, s, mred, wf, at):
+    """The reduced load g0, g1 that build_segment left in wf[:n], wf[n:2n], each over its mass, into wf[at:at + 2n]
+    (one division per degree of freedom, not one per mode)."""
+    for r in range(n):
+        wf[at + r] = wf[r] / mred[s, r]
+        wf[at + n + r] = wf[n + r] / mred[s, r]
+
+
+@njit(cache=True, inline='always')
+def _modal_load(n, s, k, vinv, wf, at):
+    """Mode k's share (a, b) of the load g0 + g1 tau, given over the masses at wf[at:at + 2n] (_load_over_mass)."""
     a = 0.0 + 0.0j
     b = 0.0 + 0.0j
     for r in range(n):
-        a += vinv[s, k, n + r] * (wf[r] / mred[s, r])
-        b += vinv[s, k, n + r] * (wf[n + r] / mred[s, r])
+        a += vinv[s, k, n + r] * wf[at + r]
+        b += vinv[s, k, n + r] * wf[at + n + r]
     return a, b
+
 
 @njit(cache=True, inline='always')
 def _modal_particular(n, s, lam, vec, vinv, mred, wf):
@@ -712,13 +729,14 @@ def _modal_particular(n, s, lam, vec, vinv, mred, wf):
     -(a + b / lam) / lam - b tau / lam, or a tau + b tau^2 / 2 for a zero mode.  Written into
     wf: the positions at tau = 0 (QP, 3n), the velocities at 0 (U1, 2n) and the tau^2 coefficients (TMP, 4n).
     """
-    U1, QP, TMP = 2 * n, 3 * n, 4 * n  # after g0, g1 (_modal_load)
+    U1, QP, TMP, SCALED = 2 * n, 3 * n, 4 * n, 5 * n  # after g0, g1; SCALED: scratch of 2n
     for i in range(n):
         wf[U1 + i] = 0.0
         wf[QP + i] = 0.0
         wf[TMP + i] = 0.0
+    _load_over_mass(n, s, mred, wf, SCALED)
     for k in range(2 * n):
-        a, b = _modal_load(n, s, k, vinv, mred, wf)
+        a, b = _modal_load(n, s, k, vinv, wf, SCALED)
         lk = lam[s, k]
         gamma = 0.0 + 0.0j
         if lk == 0.0:
