@@ -1203,22 +1203,24 @@ def segment_load(p, record, harm, t, t_end):
 
 
 @njit(cache=True, inline='always')
-def integrate_energy(w, s, n, tau, building, units, springs, harm, record, load_at, yielding):
+def integrate_energy(w, s, tau, building, units, springs, harm, record, load_at, yielding):
     """The energy terms over the segment: from the modal tables under a record, from the rows under a harmonic;
     yielding: the building's storeys can yield (its load's work is taken from the state, integrate_modal)."""
     if harm is None:
-        integrate_modal(w, s, n, tau, units, record, load_at[1], load_at[2], yielding)
+        integrate_modal(w, s, w.size[s], tau, units, record, load_at[1], load_at[2], yielding)
     else:
         integrate_segment(w, tau, building, units, springs, harm, record, load_at)
 
 
 @njit(cache=True, inline='always')
-def move_to_end(w, building, units, springs, fric, yld, tau, s, harmonic, theta0, omega):
+def move_to_end(w, building, units, springs, fric, yld, tau, s, wave):
     """The state at the segment's end, the friction and plastic work on the way, and the largest stored energy.
 
     A yielding building's state is advanced mode by mode from itself (segment.flow_change), not read off the rows,
     whose parts beside a post-yield stiffness near zero are far larger than the motion; an elastic building's
-    from the rows, as it always was."""
+    from the rows, as it always was.  s: the segment's configuration slot; wave: (harmonic, theta0, omega), whether
+    the load is harmonic, its phase at the segment's start and its frequency."""
+    harmonic, theta0, omega = wave
     mode, sigma, kap, ek, C, P, q, v = w.mode, w.sigma, w.kap, w.ek, w.C, w.P, w.q, w.v
     s_before, diag = w.s_before, w.diag
     nf = building.mass.shape[0]
@@ -1230,7 +1232,7 @@ def move_to_end(w, building, units, springs, fric, yld, tau, s, harmonic, theta0
         flow_change(w, s, tau, harmonic, theta0)
     state_from_exp(kap, ek, C, P, tau, q, v)
     if yld is not None:
-        take_flow_state(w, s, tau, harmonic, theta0, omega, units, springs, nf)
+        take_flow_state(w, s, tau, harmonic, theta0, omega, units, nf)
     if fric is not None:
         for j in range(mode.shape[0]):
             if mode[j] == MODE_FREE and fric[j] > 0.0:
@@ -1434,8 +1436,7 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
             # once the step is known; a harmonic load's rows have no ramp and integrate term by term
             ramp_tables(kap, ek, tau, ramp, single)
         if yld is None or key >> nu == 0:
-            integrate_energy(w, s, n, tau, building, units, springs, harm, record, (theta0, r0, r1),
-                             yld is not None)
+            integrate_energy(w, s, tau, building, units, springs, harm, record, (theta0, r0, r1), yld is not None)
         else:
             # a storey yielding: the rows integrate.  A zero mode's particular velocity is not constant, which the
             # modal tables assume; and beside a stiff pendulum the tables lost 3e-9 of a probe scene's energy
@@ -1444,7 +1445,7 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
         monitor_modal(w, s, n, tau, t, t_square, monitors, (r0, r1), harm is not None, yld is not None)
         if its < ts.shape[0]:
             its = sample_segment(kap, C, P, t, tau, ts, its, samples, qs, vs)
-        move_to_end(w, building, units, springs, fric, yld, tau, s, harm is not None, theta0, omega)
+        move_to_end(w, building, units, springs, fric, yld, tau, s, (harm is not None, theta0, omega))
         t = t_next if not event else t + tau
         for j in range(nu):
             if escape[j] != 0 and not _still_leaving(j, nf, units, mode, escape, q, v):

@@ -231,7 +231,7 @@ def flow_change(w, s, tau, harmonic, theta0):
 
 
 @njit(cache=True, inline='always')
-def take_flow_state(w, s, tau, harmonic, theta0, omega, units, springs, nf):
+def take_flow_state(w, s, tau, harmonic, theta0, omega, units, nf):
     """The state at tau from flow_change, written over what the rows gave: the reduced degrees of freedom, the
     units their floor holds (its state and their offset, as their rows are the floor's), and identical spring
     units given one row (_copy_identical_rows) the same state, bit for bit."""
