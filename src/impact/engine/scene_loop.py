@@ -147,6 +147,7 @@ from impact.engine.segment import (
     derivative_row,
     energy,
     flow_change,
+    flow_tables,
     int_prod,
     int_prod_ramp,
     integral_tables,
@@ -732,6 +733,7 @@ def step_tables(s, key, tau, dt, kap, ek, pair, single, ramp, dtab):
             dek[s, k] = np.exp(kap[k] * tau)
         integral_tables(kap, dek[s], tau, dpair[s], dsingle[s])
         ramp_tables(kap, dek[s], tau, dramp[s], dsingle[s])
+        flow_tables(kap, dek[s], tau, dsingle[s])
         dkey[s] = key
     for k in range(nt):
         ek[k] = dek[s, k]
@@ -1230,9 +1232,9 @@ def move_to_end(w, building, units, springs, fric, yld, tau, s, wave):
             s_before[j] = q[nf + j] - q[ufloor[j]]
     if yld is not None:
         flow_change(w, s, tau, harmonic, theta0)
-    state_from_exp(kap, ek, C, P, tau, q, v)
-    if yld is not None:
         take_flow_state(w, s, tau, harmonic, theta0, omega, units, nf)
+    else:
+        state_from_exp(kap, ek, C, P, tau, q, v)
     if fric is not None:
         for j in range(mode.shape[0]):
             if mode[j] == MODE_FREE and fric[j] > 0.0:
@@ -1435,6 +1437,8 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
             # the ramp form's tables of any other step than a whole sample step (step_tables keeps those), made
             # once the step is known; a harmonic load's rows have no ramp and integrate term by term
             ramp_tables(kap, ek, tau, ramp, single)
+        if yld is not None and (record is None or tau != p[P_REC_DT]):
+            flow_tables(kap, ek, tau, single)  # a whole sample step's come with step_tables
         if yld is None or key >> nu == 0:
             integrate_energy(w, s, tau, building, units, springs, harm, record, (theta0, r0, r1), yld is not None)
         else:

@@ -29,8 +29,10 @@ _RECIP = np.concatenate((np.zeros(1), 1.0 / np.arange(1.0, 46.0)))  # _RECIP[n] 
 # the ramp form's series (ramp_tables): below |z T| = 2 a closed form of exp(zT) - 1 - zT - (zT)^2 / 2 loses up to
 # 3 digits to cancellation at 0.5 and one at 2; 45 terms reach eps of the result's size at 2 (2^44 / 45! = 1.5e-43)
 _RAMP_SERIES = 2.0
-#: single's columns (integral_tables, ramp_tables): tau^m exp(kap tau) for m < NPOLY, then tau^m (exp(kap tau) - 1)
-SINGLE_COLUMNS = 2 * NPOLY
+#: single's columns (integral_tables, ramp_tables, flow_tables): tau^m exp(kap tau) for m < NPOLY, then
+#: tau^m (exp(kap tau) - 1), then flow_change's two integrals
+SINGLE_COLUMNS = 2 * NPOLY + 2
+FLOW_PHI0, FLOW_PHI2 = 2 * NPOLY, 2 * NPOLY + 1
 
 
 # ----------------------------------------------------------------------------
@@ -191,7 +193,8 @@ def state_from_exp(kap, ek, C, P, tau, q, v):
 def flow_change(w, s, tau, harmonic, theta0):
     """The change of the reduced state over [0, tau] of the segment build_segment set up in slot s, each mode
     advanced from the state itself: eta(tau) - eta(0) = (lam eta(0) + a) phi1 + b phi2, with a + b t the mode's
-    share of the load, phi1 the integral over [0, tau] of exp(lam u) and phi2 that of exp(lam u) (tau - u).
+    share of the load, phi1 the integral over [0, tau] of exp(lam u) and phi2 that of exp(lam u) (tau - u), read
+    from w.single (flow_tables over the same tau).
 
     The rows reach the same state through a particular solution of the load over the mode's eigenvalue, and its
     square for the load's slope: beside a storey yielding with a post-yield stiffness near zero these are
@@ -202,8 +205,8 @@ def flow_change(w, s, tau, harmonic, theta0):
     as build_segment left it; w.wc[:2n] is scratch (each mode's change).
     """
     n = w.size[s]
-    lam, vec, vinv, mred, fidx, zc, wf, wc, ek, q, v = (w.lam, w.vec, w.vinv, w.mass, w.dof, w.forced, w.wf, w.wc,
-                                                        w.ek, w.q, w.v)
+    lam, vec, vinv, mred, fidx, zc, wf, wc, single, q, v = (w.lam, w.vec, w.vinv, w.mass, w.dof, w.forced, w.wf,
+                                                            w.wc, w.single, w.q, w.v)
     Y0, DX = 2 * n, 4 * n  # wf: g0 | g1 | the state | its change, which first holds g0 and g1 over the masses
     for i in range(n):
         full = fidx[s, i]
@@ -220,8 +223,7 @@ def flow_change(w, s, tau, harmonic, theta0):
         eta = 0.0 + 0.0j
         for l in range(2 * n):
             eta += vinv[s, k, l] * wf[Y0 + l]
-        lk = lam[s, k]
-        wc[k] = (lk * eta + a) * _phi0(lk, tau, ek[k]) + b * _phi2(lk, tau, ek[k])
+        wc[k] = (lam[s, k] * eta + a) * single[k, FLOW_PHI0] + b * single[k, FLOW_PHI2]
     for i in range(2 * n):
         wf[DX + i] = 0.0
     for k in range(2 * n):
@@ -232,9 +234,9 @@ def flow_change(w, s, tau, harmonic, theta0):
 
 @njit(cache=True, inline='always')
 def take_flow_state(w, s, tau, harmonic, theta0, omega, units, nf):
-    """The state at tau from flow_change, written over what the rows gave: the reduced degrees of freedom, the
-    units their floor holds (its state and their offset, as their rows are the floor's), and identical spring
-    units given one row (_copy_identical_rows) the same state, bit for bit."""
+    """The state at tau from flow_change: the reduced degrees of freedom, the units their floor holds (its state and
+    their offset, as their rows are the floor's), the free units without a spring from their polynomial rows, and
+    identical spring units given one row (_copy_identical_rows) the same state, bit for bit."""
     n = w.size[s]
     fidx, zc, wf, q, v, mode, offset, C, P = w.dof, w.forced, w.wf, w.q, w.v, w.mode, w.offset, w.C, w.P
     Y0, DX = 2 * n, 4 * n
@@ -253,7 +255,11 @@ def take_flow_state(w, s, tau, harmonic, theta0, omega, units, nf):
         if mode[j] != MODE_FREE:
             q[nf + j] = q[ufloor[j]] + offset[j]
             v[nf + j] = v[ufloor[j]]
-        elif j > 0 and units.kind[j] & UNIT_SPRING and mode[j - 1] == MODE_FREE and _same_row(C, P, nf + j - 1, nf + j):
+        elif not units.kind[j] & UNIT_SPRING:
+            p = P[nf + j]  # a free unit without a spring moves on its polynomial alone (build_segment)
+            q[nf + j] = poly_at(p, tau)
+            v[nf + j] = p[1] + tau * (2.0 * p[2] + 3.0 * tau * p[3])
+        elif j > 0 and mode[j - 1] == MODE_FREE and _same_row(C, P, nf + j - 1, nf + j):
             q[nf + j] = q[nf + j - 1]
             v[nf + j] = v[nf + j - 1]
 
@@ -826,6 +832,15 @@ def _phi2(z, big_t, ez):
             acc = 1.0 + zt * acc * _RECIP[n + 2]
         return 0.5 * acc * big_t * big_t
     return (ez - 1.0 - zt) / (z * z)
+
+
+@njit(cache=True)
+def flow_tables(kap, ek, big_t, single):
+    """flow_change's integrals over [0, T] per exponent, into single[:, FLOW_PHI0] and single[:, FLOW_PHI2]: kept
+    with a record's sample step per configuration (scene_loop.step_tables), as the other tables are."""
+    for k in range(kap.shape[0]):
+        single[k, FLOW_PHI0] = _phi0(kap[k], big_t, ek[k])
+        single[k, FLOW_PHI2] = _phi2(kap[k], big_t, ek[k])
 
 
 @njit(cache=True)
