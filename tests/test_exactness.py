@@ -512,7 +512,8 @@ HELD_AT_SCALE = {
     # hardening 0.015, 0, 0.0048) 1.2e-9, -1.5e-9, 1.6e-9 -> -1.7e-11, 1.2e-10, -5.8e-11; 1899 (P-delta beside a
     # CID) -1.6e-9 -> -2.4e-10; and perfectly plastic storeys beside dampers in micrometre gaps, 1322 and 908
     # (3.1e-9, 2.6e-9 -> -1.2e-13, -2.0e-12), the same cause.  (Their sister 1420, one storey beside a unit in a gap
-    # of 1.2e-10 m, balances to 6e-13 but ends at its event budget, flagged: too slow for the suite.)  And 1178 (10 storeys with P-delta, the weakest keeping 0.54 % of its stiffness, 0.149 rad/s), whose
+    # of 1.2e-10 m, balances to 6e-13 but ends at its event budget, flagged: too slow for the suite.)  And 1178
+    # (10 storeys with P-delta, the weakest keeping 0.54 % of its stiffness, 0.149 rad/s), whose
     # load's work was still integrated term by term from the rows (-1.9e-6 before the dissipation's ramp form, then
     # 1.4e-9): -1.3e-9 with the state advanced from itself, -8.8e-11 with the work in the ramp form from the
     # state's velocities as well (modal.integrate_modal's from_state, the dissipation's form)
