@@ -157,17 +157,24 @@ def smallest_tangent(scene: Scene) -> float | None:
     return float(np.min(np.abs(tangents) / scene.building.storey_stiffness))
 
 
-def _sampled_peaks(scene: Scene, q: np.ndarray) -> np.ndarray:
-    """The monitors' displacement rows (roof, drifts, first unit of each damper's stroke) over samples."""
+def _monitor_rows(scene: Scene, q: np.ndarray, sign: float) -> list[np.ndarray]:
+    """The monitors' displacement rows over samples (roof, drifts, first unit of each damper's stroke), each a
+    position and the one below it (a floor's, a unit's floor's) combined: less it (sign -1), or, for their
+    round-off, plus it (sign +1)."""
     nf = scene.building.storeys
     floors = q[:, :nf]
-    drifts = np.diff(np.concatenate([np.zeros((len(q), 1)), floors], axis=1), axis=1)
-    strokes, first = [], 0
-    for d in scene.dampers:
-        strokes.append(q[:, nf + first] - q[:, scene.floor_index(d.floor)])
-        first += int(d.units)
-    rows = [floors[:, -1], *drifts.T, *strokes]
-    return np.array([np.max(np.abs(r)) for r in rows])
+    below = np.concatenate([np.zeros((len(q), 1)), floors[:, :-1]], axis=1)
+    firsts = np.cumsum([0] + [int(d.units) for d in scene.dampers])[:-1]
+    strokes = [q[:, nf + first] + sign * q[:, scene.floor_index(d.floor)] for first, d in zip(firsts, scene.dampers)]
+    return [floors[:, -1], *(floors + sign * below).T, *strokes]
+
+
+def _sampled_peaks(scene: Scene, samples: dict) -> np.ndarray:
+    """Each monitor's largest sample taken at the least it can be: its size less its round-off (the scene loop's
+    q_roundoff, each position's, summed over a difference)."""
+    values = _monitor_rows(scene, samples["q"], -1.0)
+    noise = _monitor_rows(scene, samples.get("q_roundoff", np.zeros_like(samples["q"])), 1.0)
+    return np.array([np.max(np.abs(r) - e) for r, e in zip(values, noise)])
 
 
 def _stop(scene: Scene, diag: dict) -> str:
@@ -179,6 +186,15 @@ def _stop(scene: Scene, diag: dict) -> str:
         return (f"{diag['stopped_by']} at a {diag['stop_event']} of unit {diag['stop_unit']}: e = {damper.e:.2f}, "
                 f"gap {damper.gap:.1e} m")
     return f"{diag['stopped_by']} at a {diag['stop_event']} of storey {diag['stop_storey']}"
+
+
+def _roundoff(result) -> np.ndarray | float:
+    """What each displacement monitor's certified peak is certified to (SceneResult.peak_roundoff, the roof's
+    acceleration left out, as _sampled_peaks leaves it): the round-off of the rows its motion is written in, below
+    which neither the peak search nor a sample of the same rows can tell two values apart."""
+    if result.peak_roundoff is None:
+        return 0.0
+    return np.delete(result.peak_roundoff, 1)
 
 
 def violations(scene: Scene, scale: float, result) -> list[str]:
@@ -198,8 +214,8 @@ def violations(scene: Scene, scale: float, result) -> list[str]:
     if diag["uncertified_peak_segments"]:
         found.append("uncertified peak")
     certified = np.concatenate([[result.peak_roof_displacement], result.peak_drifts, result.peak_strokes])
-    sampled = _sampled_peaks(scene, result.samples["q"])
-    allowed = certified * (1 + 1e-9) + 1e-12 * scale
+    sampled = _sampled_peaks(scene, result.samples)
+    allowed = certified * (1 + 1e-9) + 1e-12 * scale + _roundoff(result)
     # a stroke between walls is certified at its cap, half the gap, from its first impact on (the engine stops
     # searching it there); a sample past the wall is penetration, which has its own bound above
     walls = np.array([0.5 * d.gap if d.kind in ("cid", "pid") else np.inf for d in scene.dampers])

@@ -65,9 +65,10 @@ SceneArrays = namedtuple("SceneArrays", "p building units load_vec monitors")
 StartState = namedtuple("StartState", "q v mode side")
 
 #: what a run writes: impact records (layout.R_*), diagnostics (layout.D_*), final state, each monitor's
-#: peak, its time and the window's square integral, the dense output at the times ts, and every unit's final
-#: contact state (a row of mode, wall side and slide sign)
-RunOutputs = namedtuple("RunOutputs", "recs diag q v peak peak_t x2 ts samples contact")
+#: peak, its time, the window's square integral and the round-off its peak is certified to (events.peak_abs's
+#: slack, the largest of the run), the dense output at the times ts, and every unit's final contact state (a row
+#: of mode, wall side and slide sign)
+RunOutputs = namedtuple("RunOutputs", "recs diag q v peak peak_t x2 roundoff ts samples contact")
 
 #: the state the loop advances: every unit's contact state (mode, wall side, slide sign, offset from its
 #: floor, escape flags of the event searches, what settle checks), positions and velocities
@@ -141,14 +142,14 @@ class SegmentWork(structref.StructRefProxy):
     offsets before the segment, mode weights wt), each unit's next event (ev_t ev_side ev_kind),
     build_segment's scratch, the modal tables, the configuration cache, the load vector, the run's state
     (RunState's arrays but check), and what the segment writes (diagnostics, the monitors' peaks,
-    their times, the window's square).  Its arrays are borrowed views (borrowed): `owner` holds what they are
+    their times, the window's square, the round-off each peak is certified to).  Its arrays are borrowed views (borrowed): `owner` holds what they are
     views of, for as long as the SegmentWork lives.
     """
 
 
 SEGMENT_WORK_FIELDS = ("kap C P ek pair single ramp kpow cs ps cq pq cm pm cv pv cu pu stack found cu1 aw s_before wt "
                        "ev_t ev_side ev_kind cache load_vec mode side sigma offset escape escape_v q v "
-                       "diag mon_peak mon_peak_t mon_x2 " + FLAT_FIELDS + " owner").split()
+                       "diag mon_peak mon_peak_t mon_x2 mon_roundoff " + FLAT_FIELDS + " owner").split()
 structref.define_proxy(SegmentWork, SegmentWorkType, SEGMENT_WORK_FIELDS)
 
 

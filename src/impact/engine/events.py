@@ -20,7 +20,7 @@ import math
 import numpy as np
 from numba import njit
 
-from impact.engine.segment import bound_tab, deriv_at0, eval2, eval3
+from impact.engine.segment import bound_tab, deriv_at0, eval2, eval3, poly_at, poly_slope_at
 
 HMIN = 1e-12       # smallest step before a touch is declared tangential
 _EPS = 2.220446049250313e-16
@@ -354,8 +354,8 @@ def _ends(kap, ek, c, p, big_t):
     """h(0), h'(0), h(T), h'(T) from ek = exp(kap T): no exponentials to evaluate."""
     h0 = p[0]
     d0 = p[1]
-    h1 = p[0] + big_t * (p[1] + big_t * (p[2] + big_t * p[3]))
-    d1 = p[1] + big_t * (2.0 * p[2] + 3.0 * big_t * p[3])
+    h1 = poly_at(p, big_t)
+    d1 = poly_slope_at(p, big_t)
     for k in range(kap.shape[0]):
         ck = c[k]
         if ck.real != 0.0 or ck.imag != 0.0:
@@ -414,8 +414,8 @@ def shift_row(kap, c, p, a, cs, ps):
     """The row h(a + tau) as a row in tau (cs, ps: its terms and polynomial)."""
     for k in range(kap.shape[0]):
         cs[k] = c[k] * np.exp(kap[k] * a)
-    ps[0] = p[0] + a * (p[1] + a * (p[2] + a * p[3]))
-    ps[1] = p[1] + a * (2.0 * p[2] + 3.0 * a * p[3])
+    ps[0] = poly_at(p, a)
+    ps[1] = poly_slope_at(p, a)
     ps[2] = p[2] + 3.0 * a * p[3]
     ps[3] = p[3]
 
@@ -504,21 +504,22 @@ def _taylor_bound(kap, c, p, big_t):
 def peak_abs(kap, kpow, ek, c, p, big_t, peak, stack):
     """max(peak, max |h| over [0, T]), certified to PEAK_RTOL (see _peak_search); stack: (n, 4) work array.
 
-    Returns the new peak, the time where it is attained (-1 if the old peak stands) and whether the search
+    Returns the new peak, the time where it is attained (-1 if the old peak stands), whether the search
     finished (False: it gave up after many visits per extremum the fastest mode can have, and the peak is
-    only a lower bound).
+    only a lower bound) and the slack it was certified to: |h| <= peak (1 + PEAK_RTOL) + slack over [0, T].
     """
-    peak, at, status = _peak_search(kap, kpow, ek, c, p, big_t, peak, stack)
+    peak, at, status, slack = _peak_search(kap, kpow, ek, c, p, big_t, peak, stack)
     rows = stack.shape[0]
     while status == _STACK_FULL:
         # a long segment of a fast mode outgrew the stack: search again with a deeper one, rarely enough to
         # allocate it here (growing it inside the search's loop cost the common short search 5 %).  The peak
         # found so far is attained, so it stands as the new search's bound
         rows *= 4
-        peak, at_again, status = _peak_search(kap, kpow, ek, c, p, big_t, peak, np.empty((rows, 4)))
+        peak, at_again, status, again = _peak_search(kap, kpow, ek, c, p, big_t, peak, np.empty((rows, 4)))
+        slack = max(slack, again)
         if at_again >= 0.0:
             at = at_again
-    return peak, at, status == _FINISHED
+    return peak, at, status == _FINISHED, slack
 
 
 @njit(cache=True)
@@ -533,7 +534,8 @@ def _peak_search(kap, kpow, ek, c, p, big_t, peak, stack):
     Intervals are searched from the segment's start: a decaying transient's
     largest swing comes first and prunes the rest.
     kpow: kappa_powers of kap; ek = exp(kap T); stack: (n, 4) work array.  Returns the new peak, the time
-    where it is attained (-1 if the old peak stands) and _FINISHED, _GAVE_UP or _STACK_FULL.
+    where it is attained (-1 if the old peak stands), _FINISHED, _GAVE_UP or _STACK_FULL, and the slack the
+    intervals were dropped at: the round-off of evaluating the row, which no search can see below.
     """
     h0, d0, h1, d1 = _ends(kap, ek, c, p, big_t)
     at = -1.0
@@ -545,7 +547,7 @@ def _peak_search(kap, kpow, ek, c, p, big_t, peak, stack):
         at = big_t
     m2 = bound_tab(kpow, c, p, 2, big_t)
     if max(abs(h0), abs(h1)) + m2 * big_t * big_t / 8.0 <= peak * (1.0 + PEAK_RTOL):
-        return peak, at, _FINISHED
+        return peak, at, _FINISHED, 0.0
     m3 = bound_tab(kpow, c, p, 3, big_t)
     # h is a sum of terms of this size: a swing within its round-off of the peak cannot be told from it
     # (a row that cancels to round-off, a TMD's stroke of 1e-17 m, would otherwise be split to hmin)
@@ -569,11 +571,11 @@ def _peak_search(kap, kpow, ek, c, p, big_t, peak, stack):
                 slack = noise + PEAK_RTOL * size
                 visits = 0
             elif _unsearched_bound(kap, c, p, stack, top, m2) <= peak * (1.0 + PEAK_RTOL) + slack:
-                return peak, at, _FINISHED  # what is left unsearched exceeds the peak by at most its bound
+                return peak, at, _FINISHED, slack  # what is left unsearched exceeds the peak by at most its bound
             elif _split_taylor_bound(kap, c, p, big_t) <= peak * (1.0 + PEAK_RTOL) + slack:
-                return peak, at, _FINISHED  # the whole segment is bounded by its series, to the same slack
+                return peak, at, _FINISHED, slack  # the whole segment is bounded by its series, to the same slack
             else:
-                return peak, at, _GAVE_UP
+                return peak, at, _GAVE_UP, slack
         top -= 1
         a = stack[top, 0]
         b = stack[top, 1]
@@ -587,7 +589,7 @@ def _peak_search(kap, kpow, ek, c, p, big_t, peak, stack):
         if (da > 0.0) == (db > 0.0) and min(abs(da), abs(db)) - m3 * w * w / 8.0 > 0.0:
             continue  # monotone: the ends were counted
         if top + 2 >= stack.shape[0]:
-            return peak, at, _STACK_FULL  # an interval dropped here would be a maximum never looked at
+            return peak, at, _STACK_FULL, slack  # an interval dropped here would be a maximum never looked at
         if (da > 0.0) != (db > 0.0) and da != 0.0 and db != 0.0:
             tz = _zero_of_derivative(kap, c, p, a, b, da)
             hz, _, ddz = eval3(kap, c, p, tz)
@@ -609,4 +611,4 @@ def _peak_search(kap, kpow, ek, c, p, big_t, peak, stack):
         peak, at, dmid = _probe(kap, c, p, mid, peak, at)
         top = _push(stack, top, mid, b, dmid, db)
         top = _push(stack, top, a, mid, da, dmid)
-    return peak, at, _FINISHED
+    return peak, at, _FINISHED, slack

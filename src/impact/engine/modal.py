@@ -33,7 +33,7 @@ from numba import njit
 
 from impact.engine.bundles import ModalTables
 from impact.engine.layout import D_STUCKTIME, D_VISC, D_WORK, MODE_FREE, MODE_LOCKED, MON_ACCEL, NPOLY
-from impact.engine.segment import poly_bound, poly_integral
+from impact.engine.segment import poly_at, poly_bound, poly_integral
 
 
 @njit(cache=True)
@@ -212,7 +212,7 @@ def monitor_row(w, s, m, n, monitors, r0, r1, harmonic):
 def end_values(ek, c, p, big_t):
     """h(0) and h(T) of a row, from ek = exp(kap T)."""
     h0 = p[0]
-    h1 = p[0] + big_t * (p[1] + big_t * (p[2] + big_t * p[3]))
+    h1 = poly_at(p, big_t)
     for k in range(c.shape[0]):
         ck = c[k]
         h0 += ck.real

@@ -196,7 +196,8 @@ def simulate(scene: Scene, measures=DEFAULT_MEASURES, *, record: int = 0, times=
     "peaks" (the certified peaks of the roof, every drift and every unit's stroke, and their RMS), "drifts" or
     "strokes" (the certified peaks of the storeys' drifts or of the units' strokes alone), "records" (each
     impact's time, unit, side, velocities and impulse, up to `record` of them), "samples" (every degree of freedom's
-    displacement and velocity at `times`, a sorted array of instants).  Asking only for what is read lets the
+    displacement and velocity at `times`, a sorted array of instants, and, from the scene loop, each displacement's
+    round-off, "q_roundoff").  Asking only for what is read lets the
     dispatch pick the fastest loop that measures it, and the scene loop certify only the peaks that are read: a
     peak not asked for is NaN, and so are the amplitude and the roof's RMS unless "amplitude" or "peaks" is asked.
     """

@@ -152,6 +152,7 @@ from impact.engine.segment import (
     int_prod_ramp,
     integral_tables,
     kappa_powers,
+    poly_at,
     ramp_tables,
     same_unit,
     scene_key,
@@ -265,7 +266,7 @@ def _clear_of_walls(kpow, ek, c, p, lo, hi, big_t, delta):
     steps of a record are settled by it without evaluating an exponential.
     """
     h0 = p[0]
-    h1 = p[0] + big_t * (p[1] + big_t * (p[2] + big_t * p[3]))
+    h1 = poly_at(p, big_t)
     for k in range(c.shape[0]):
         ck = c[k]
         if ck.real != 0.0 or ck.imag != 0.0:
@@ -758,7 +759,7 @@ def monitor_modal(w, s, n, tau, t, t_win, monitors, ramp, harmonic, yielding):
     (the roof) still gives the window its square where the segment reaches into it.
     """
     kap, kpow, ek, cm, pm, stack, wt, diag = w.kap, w.kpow, w.ek, w.cm, w.pm, w.stack, w.wt, w.diag
-    mon_peak, mon_peak_t = w.mon_peak, w.mon_peak_t
+    mon_peak, mon_peak_t, mon_roundoff = w.mon_peak, w.mon_peak_t, w.mon_roundoff
     mon_rows, mon_cap = monitors.rows, monitors.cap
     r0, r1 = ramp
     for m in range(mon_rows.shape[0]):
@@ -777,9 +778,10 @@ def monitor_modal(w, s, n, tau, t, t_win, monitors, ramp, harmonic, yielding):
         peak = mon_peak[m]
         if ends > peak or ends + curvature_bound(w, s, m, n, tau, harmonic) * tau * tau / 8.0 \
                 > peak * (1.0 + PEAK_RTOL):
-            peak, at, certified = peak_abs(kap, kpow, ek, cm, pm, tau, peak, stack)
+            peak, at, certified, slack = peak_abs(kap, kpow, ek, cm, pm, tau, peak, stack)
             if not certified:
                 diag[D_PEAK_GAVE_UP] += 1.0
+            mon_roundoff[m] = max(mon_roundoff[m], slack)
             if at >= 0.0:
                 mon_peak[m] = peak
                 mon_peak_t[m] = t + at
@@ -1293,6 +1295,7 @@ def _start(t, model, springs, fric, harm, record, yld, st, scratch, out):
         out.peak[m] = 0.0
         out.peak_t[m] = t
         out.x2[m] = 0.0
+        out.roundoff[m] = 0.0
 
 
 @njit(cache=True)
@@ -1341,7 +1344,7 @@ def _segment_work(ws, st, out, cache, load_vec):
                        b(rows.cu), b(rows.pu), b(vecs.stack), b(vecs.found), b(vecs.reduced), b(vecs.moduli),
                        b(vecs.s_before), b(vecs.wt), b(ev.t), b(ev.side), b(ev.kind), cache_b, b(load_vec), b(st.mode), b(st.side), b(st.sigma), b(st.offset),
                        b(st.escape), b(st.escape_v), b(st.q), b(st.v), b(out.diag), b(out.peak), b(out.peak_t),
-                       b(out.x2), cache_b.size, cache_b.lam, cache_b.vec, cache_b.vinv, cache_b.kinv,
+                       b(out.x2), b(out.roundoff), cache_b.size, cache_b.lam, cache_b.vec, cache_b.vinv, cache_b.kinv,
                        cache_b.damping, cache_b.dof, cache_b.load, cache_b.forced, cache_b.mass, mtab_b.gvis,
                        mtab_b.lmod, mtab_b.mvec, mtab_b.mbnd, b(work[0]), b(work[1]), (ws, st))
 

@@ -67,6 +67,8 @@ class SceneResult(EndsInState):
     final_q: np.ndarray
     final_v: np.ndarray
     records: dict | None = field(default=None, repr=False)
+    #: dense output: "t" the times, "q" and "v" every degree of freedom there, and "q_roundoff" each position's
+    #: round-off, the size of its row's terms times events.PEAK_NOISE (what a sample is known to)
     samples: dict | None = field(default=None, repr=False)
     #: the paper's amplitude, sqrt(2) RMS of the roof over the window
     amplitude: float = math.nan
@@ -78,6 +80,11 @@ class SceneResult(EndsInState):
     storeys: "StoreyResponse | None" = None
     #: every unit's contact at the run's end (impact.model.scene.Contact), in Scene.unit_list() order
     final_contacts: tuple = ()
+    #: what each certified peak is certified to: every value of the monitor over the run lies below
+    #: peak (1 + 1e-12) + this, the round-off of the rows the motion is written in (events.peak_abs), 0 where no
+    #: search needed it; in the monitors' order: the roof's displacement and acceleration, each storey's drift,
+    #: each damper's stroke (NaN where not asked for).  None from a loop that does not certify peaks so
+    peak_roundoff: np.ndarray | None = field(default=None, repr=False)
 
     def as_json(self, units: str = "m") -> dict:
         out = {
@@ -339,8 +346,9 @@ def run_arrays(arrays: dict, record: int = 0, times=None):
     nmon = len(arrays["model"].monitors.kind)
     ts = np.asarray(times, dtype=float) if times is not None else np.zeros(0)
     out = RunOutputs(recs=np.zeros((int(record), L.NREC)), diag=np.zeros(L.NDIAG), q=np.zeros(nfull),
-                     v=np.zeros(nfull), peak=np.zeros(nmon), peak_t=np.zeros(nmon), x2=np.zeros(nmon), ts=ts,
-                     samples=np.zeros((len(ts), 2 * nfull)),
+                     v=np.zeros(nfull), peak=np.zeros(nmon), peak_t=np.zeros(nmon), x2=np.zeros(nmon),
+                     roundoff=np.zeros(nmon), ts=ts,
+                     samples=np.zeros((len(ts), 3 * nfull)),
                      contact=np.zeros((len(arrays["start"].mode), 3), dtype=np.int64))
     a = arrays
     cache = ConfigCache(*(c.copy() for c in a["cache"]))
@@ -407,10 +415,13 @@ def _result(scene: Scene, arrays: dict, out: dict, groups=PEAK_GROUPS, window: b
     samples = None
     if len(out["ts"]):
         nfull = len(out["q"])
-        samples = {"t": out["ts"], "q": out["samples"][:, :nfull], "v": out["samples"][:, nfull:]}
-    peaks = out["peak"].copy()
+        dense = out["samples"]
+        samples = {"t": out["ts"], "q": dense[:, :nfull], "v": dense[:, nfull:2 * nfull],
+                   "q_roundoff": dense[:, 2 * nfull:]}
+    peaks, roundoff = out["peak"].copy(), out["roundoff"].copy()
     for part in _unasked(nf, groups):
         peaks[part] = math.nan
+        roundoff[part] = math.nan
     return SceneResult(
         scene=scene,
         peak_roof_displacement=float(peaks[0]) if complete else math.nan,
@@ -430,6 +441,7 @@ def _result(scene: Scene, arrays: dict, out: dict, groups=PEAK_GROUPS, window: b
         window_span=float(span),
         storeys=_storey_response(scene, out["yld"], peaks[2:2 + nf], collapsed),
         final_contacts=contacts_of(out["contact"]),
+        peak_roundoff=roundoff,
     )
 
 

@@ -39,9 +39,16 @@ FLOW_PHI0, FLOW_PHI2 = 2 * NPOLY, 2 * NPOLY + 1
 # evaluation of one coefficient-form row
 # ----------------------------------------------------------------------------
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def poly_at(p, tau):
+    """A row's cubic at tau, in the one order of operations every step reads it in (the same bits everywhere)."""
     return p[0] + tau * (p[1] + tau * (p[2] + tau * p[3]))
+
+
+@njit(cache=True, inline='always')
+def poly_slope_at(p, tau):
+    """The cubic's slope at tau, likewise."""
+    return p[1] + tau * (2.0 * p[2] + 3.0 * tau * p[3])
 
 
 @njit(cache=True)
@@ -80,7 +87,7 @@ def eval3(kap, c, p, tau):
             dh += z.real
             ddh += (z * kap[k]).real
     h += poly_at(p, tau)
-    dh += p[1] + tau * (2.0 * p[2] + 3.0 * tau * p[3])
+    dh += poly_slope_at(p, tau)
     ddh += 2.0 * p[2] + 6.0 * tau * p[3]
     return h, dh, ddh
 
@@ -258,7 +265,7 @@ def take_flow_state(w, s, tau, harmonic, theta0, omega, units, nf):
         elif not units.kind[j] & UNIT_SPRING:
             p = P[nf + j]  # a free unit without a spring moves on its polynomial alone (build_segment)
             q[nf + j] = poly_at(p, tau)
-            v[nf + j] = p[1] + tau * (2.0 * p[2] + 3.0 * tau * p[3])
+            v[nf + j] = poly_slope_at(p, tau)
         elif j > 0 and mode[j - 1] == MODE_FREE and _same_row(C, P, nf + j - 1, nf + j):
             q[nf + j] = q[nf + j - 1]
             v[nf + j] = v[nf + j - 1]
