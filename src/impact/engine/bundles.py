@@ -142,8 +142,8 @@ class SegmentWork(structref.StructRefProxy):
     offsets before the segment, mode weights wt), each unit's next event (ev_t ev_side ev_kind),
     build_segment's scratch, the modal tables, the configuration cache, the load vector, the run's state
     (RunState's arrays but check), and what the segment writes (diagnostics, the monitors' peaks,
-    their times, the window's square, the round-off each peak is certified to).  Its arrays are borrowed views (borrowed): `owner` holds what they are
-    views of, for as long as the SegmentWork lives.
+    their times, the window's square, the round-off each peak is certified to).  Its arrays are borrowed views
+    (borrowed): `owner` holds what they are views of, for as long as the SegmentWork lives.
     """
 
 
