@@ -17,7 +17,7 @@ from numba import njit
 from impact.engine import layout as L
 from impact.engine import paper_loop as K
 from impact.engine.events import PEAK_NOISE
-from impact.engine.segment import state_from_exp
+from impact.engine.segment import poly_bound, state_from_exp
 
 
 @njit(cache=True)
@@ -30,7 +30,7 @@ def sample_segment(kap, C, P, t, tau, ts, its, samples, qs, vs):
         at = max(ts[its] - t, 0.0)
         for k in range(kap.shape[0]):
             ek[k] = np.exp(kap[k] * at)
-        state_from_exp(kap, ek, C, P, at, qs, vs)  # state_at, its exponentials kept for the round-off
+        state_from_exp(kap, ek, C, P, at, qs, vs)
         for i in range(nfull):
             samples[its, i] = qs[i]
             samples[its, nfull + i] = vs[i]
@@ -44,7 +44,7 @@ def row_roundoff(ek, C, P, i, tau):
     """The round-off of row i's value at tau (ek = exp(kap tau)): its terms' sizes times events.PEAK_NOISE, as
     the peak search counts a row's.  Where the terms cancel (a slow mode's particular solution of metres against
     its exponential, to a motion of micrometres) it is far above the value's last bit."""
-    size = abs(P[i, 0]) + tau * (abs(P[i, 1]) + tau * (abs(P[i, 2]) + tau * abs(P[i, 3])))
+    size = poly_bound(P[i], 0, tau)
     for k in range(ek.shape[0]):
         size += abs(C[i, k] * ek[k])
     return PEAK_NOISE * size

@@ -168,19 +168,9 @@ def derivative_row(kap, c, p, cd, pd):
     pd[3] = 0.0
 
 
-@njit(cache=True)
-def state_at(kap, C, P, tau, q, v):
-    """Positions and velocities of every degree of freedom at tau."""
-    nt = kap.shape[0]
-    ek = np.empty(nt, dtype=np.complex128)
-    for k in range(nt):
-        ek[k] = np.exp(kap[k] * tau)
-    state_from_exp(kap, ek, C, P, tau, q, v)
-
-
 @njit(cache=True, inline='always')
 def state_from_exp(kap, ek, C, P, tau, q, v):
-    """state_at with ek = exp(kap tau) given."""
+    """Positions and velocities of every degree of freedom at tau, from ek = exp(kap tau)."""
     nt = kap.shape[0]
     for i in range(C.shape[0]):
         x = 0.0
