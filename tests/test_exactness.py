@@ -546,7 +546,9 @@ OPEN_AT_SCALE = {
     # a different cause, the motion itself, whose load work moves by 1.1e-7 from one OpenBLAS kernel set to another
     # (-9.1e-8, +4.6e-9, -9.0e-8 under Haswell, Sandybridge, SkylakeX): the TMD's modes beside the soft storey read
     # through an ill-conditioned eigenbasis (docs/model.md, "Energy balance").  With its state advanced from itself
-    # (segment.flow_change, as every building's with P-delta) and its load's work in the ramp form, -3.3e-8
+    # (segment.flow_change, as every building's with P-delta) and its load's work in the ramp form, -3.3e-8; under
+    # SandyBridge, SkylakeX and Prescott -5.5e-10, -3.3e-8, +4.2e-8: round-off, from the modal coefficients (the
+    # integrals' sums lose 1.3e-9 at most; "The open scene, measured")
     (2572387895, 2905): "energy residual",
 }
 #: scenes the probe at scale found that the model now refuses by name: a PID or TMD tuned outside

@@ -19,8 +19,10 @@ reproducer: scene i of seed s is yielding if ``default_rng([s, i, 2]).random()``
 is drawn from ``numpy.random.default_rng([s, i, 1])`` if so, else from ``default_rng([s, i])``, so that a seed's
 elastic scenes are the ones it drew before yielding buildings existed), then its yielding scenes by their
 post-yield stiffness nearest zero (bands of |b k - P/h| / k, with the energy breaks in each: near zero the exact
-flow loses digits, docs/model.md), and writes them all to ``--out`` (JSON).  A scene that runs past ``--timeout``
-seconds is a break of its own ("over the time bound").
+flow loses digits, docs/model.md), then the worst energy breaks run again under other OpenBLAS kernel sets (a break
+whose residual changes sign or spreads as wide as itself when only the round-off changes is round-off, and says so),
+and writes them all to ``--out`` (JSON).  A scene that runs past ``--timeout`` seconds is a break of its own ("over
+the time bound").
 """
 
 from __future__ import annotations
@@ -29,7 +31,9 @@ import argparse
 import json
 import multiprocessing
 import multiprocessing.connection
+import os
 import secrets
+import subprocess
 import sys
 import time
 from collections import defaultdict
@@ -66,15 +70,59 @@ def run_one(seed: int, index: int, share: float) -> dict:
         return {"seed": seed, "index": index, "seconds": 0.0, "storeys": None, "dampers": None, "load": None,
                 "yielding": yielding, "broke": [f"refused as drawn, {type(exc).__name__}: {str(exc).splitlines()[0][:160]}"]}
     started = time.perf_counter()
+    residual = None
     try:
         times = np.linspace(0.0, scene.t_end, SAMPLES)
         result = simulate(scene, measures=("amplitude", "impacts", "peaks", "samples"), times=times)
         broke = violations(scene, scale, result)
+        residual = result.diagnostics["energy_residual"]
     except Exception as exc:  # noqa: BLE001 (a refusal or a crash is what the probe reports)
         broke = [f"{type(exc).__name__}: {str(exc).splitlines()[0][:160]}"]
     return {"seed": seed, "index": index, "seconds": time.perf_counter() - started, "broke": broke,
             "storeys": scene.building.storeys, "dampers": [d.kind for d in scene.dampers],
-            "load": type(scene.load).__name__, "yielding": yielding, "tangent": smallest_tangent(scene)}
+            "load": type(scene.load).__name__, "yielding": yielding, "tangent": smallest_tangent(scene),
+            "energy_residual": residual}
+
+
+#: the kernel sets an energy break is run again under (OpenBLAS's names; the study's own is kernels.PINS'): what
+#: the residual does when only the round-off changes
+OTHER_KERNELS = ("SandyBridge", "Prescott")
+
+
+def under_kernels(seed: int, index: int, share: float, kernel_set: str) -> float | None:
+    """Scene `index`'s energy residual run again in a fresh process under another OpenBLAS kernel set (None if it
+    does not finish there)."""
+    env = dict(os.environ, **{kernels.PINS["openblas"].override: kernel_set})
+    command = [sys.executable, "-m", "impact.kernels", __file__, "--reproduce", str(seed), str(index),
+               "--yielding", str(share)]
+    done = subprocess.run(command, env=env, capture_output=True, text=True, check=False)
+    text = done.stdout[done.stdout.find("\n{") + 1:] if done.returncode == 0 else ""
+    return json.loads(text).get("energy_residual") if text.startswith("{") else None
+
+
+def sensitivity(residuals: list[float | None]) -> str:
+    """What an energy break's residuals under several kernel sets say: "round-off" where they change sign or
+    spread over at least half the largest (the break is as large as its round-off sensitivity, and no value of it
+    is sharper than that), "systematic" where they agree, "unknown" where a run did not finish."""
+    if not residuals or any(r is None for r in residuals):
+        return "unknown"
+    largest = max(abs(r) for r in residuals)
+    changes_sign = min(residuals) < 0.0 < max(residuals)
+    return "round-off" if changes_sign or max(residuals) - min(residuals) >= 0.5 * largest else "systematic"
+
+
+def energy_sensitivity(runs: list[dict], seed: int, share: float, worst: int = 10) -> list[dict]:
+    """The worst energy breaks, each run again under OTHER_KERNELS: its residuals and their verdict (sensitivity)."""
+    broken = [r for r in runs if r.get("energy_residual") is not None
+              and any(b.startswith("energy") for b in r["broke"])]
+    broken.sort(key=lambda r: -abs(r["energy_residual"]))
+    out = []
+    for run in broken[:worst]:
+        others = {name: under_kernels(seed, run["index"], share, name) for name in OTHER_KERNELS}
+        residuals = [run["energy_residual"], *others.values()]
+        out.append({"index": run["index"], "study_kernels": run["energy_residual"], **others,
+                    "verdict": sensitivity(residuals)})
+    return out
 
 
 #: the bands of `smallest_tangent` the report counts scenes and energy breaks in (0 exactly: a perfectly plastic
@@ -219,7 +267,8 @@ def main(argv=None) -> int:
               "broken_scenes": sum(bool(r["broke"]) for r in runs), "classes": classes,
               "slowest": sorted(({"index": r["index"], "seconds": r["seconds"]} for r in runs),
                                 key=lambda r: -r["seconds"])[:10],
-              "median_seconds": float(np.median(seconds)), "by_tangent": by_tangent(runs), "runs": runs}
+              "median_seconds": float(np.median(seconds)), "by_tangent": by_tangent(runs),
+              "energy_under_other_kernels": energy_sensitivity(runs, seed, args.yielding), "runs": runs}
     args.out.write_text(json.dumps(report, indent=1) + "\n")
     print(f"seed {seed}: {len(runs)} scenes ({report['yielding_scenes']} yielding), {report['broken_scenes']} broke "
           f"a promise ({report['wall_seconds']:.0f} s; reproduce one with --reproduce {seed} INDEX "
@@ -231,6 +280,11 @@ def main(argv=None) -> int:
     print("  yielding scenes by their smallest post-yield stiffness |b k - P/h| / k: scenes, energy breaks")
     for band in report["by_tangent"]:
         print(f"    {band['band']:>14s}: {band['scenes']:5d}, {band['energy_breaks']}")
+    if report["energy_under_other_kernels"]:
+        print(f"  the worst energy breaks under the study's kernels and {', '.join(OTHER_KERNELS)}:")
+        for e in report["energy_under_other_kernels"]:
+            values = ", ".join("n/a" if e[k] is None else f"{e[k]:.2e}" for k in ("study_kernels", *OTHER_KERNELS))
+            print(f"          scene {e['index']}: {values}: {e['verdict']}")
     print(f"written to {args.out}")
     return 0
 
