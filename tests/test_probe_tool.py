@@ -34,7 +34,10 @@ def test_a_scene_run_again_under_the_studys_own_kernels_in_a_fresh_process_balan
     another set is the round-off's doing, not the process's."""
     from impact import kernels
 
+    ours = kernels.chosen()["openblas"]
+    if ours is None:
+        pytest.skip("this CPU runs no pinned kernel set to name")
     seed, index, share = 20261129, 5, 0.25  # a bare 4-storey building under a force record
     here = tool.run_one(seed, index, share)["energy_residual"]
-    there = tool.under_kernels(seed, index, share, kernels.PINS["openblas"].value)
+    there = tool.under_kernels(seed, index, share, ours)
     assert here is not None and there == here
