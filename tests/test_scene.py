@@ -373,6 +373,10 @@ def test_cli_quake_prints_the_measures_and_refuses_bad_flags(capsys):
         assert key in out
     assert out["peak_roof_displacement_m"] > 0 and out["impacts"] > 0
     assert abs(out["diagnostics"]["energy_residual"]) <= 1e-9
+    # what each certified peak is known to, named as the peaks are: far below them on this building
+    known = out["peak_roundoff"]
+    assert len(known["drifts_m"]) == 2 and len(known["damper_strokes_m"]) == 1
+    assert 0.0 < known["roof_displacement_m"] < 1e-12 * out["peak_roof_displacement_m"]
     for argv, flag in ((["--zeta", "1.5"], "--zeta"), (["--storeys", "0"], "--storeys"),
                        (["--floor", "5", "--damper", "cid", "--gap-m", "0.1"], "--floor"),
                        (["--damper", "cid"], "--gap-m"),

@@ -96,9 +96,18 @@ class SceneResult(EndsInState):
             "impacts": self.impacts,
             "diagnostics": self.diagnostics,
         }
+        if self.peak_roundoff is not None:
+            out["peak_roundoff"] = self._roundoff_json(units)
         if self.storeys is not None:
             out.update(self.storeys.as_json(units))
         return out
+
+    def _roundoff_json(self, units: str) -> dict:
+        """What each certified peak is known to (peak_roundoff), named as the peaks are."""
+        r, nf = self.peak_roundoff, len(self.peak_drifts)
+        return {f"roof_displacement_{units}": float(r[0]), f"roof_acceleration_{units}s2": float(r[1]),
+                f"drifts_{units}": [float(x) for x in r[2:2 + nf]],
+                f"damper_strokes_{units}": [float(x) for x in r[2 + nf:]]}
 
 
 @dataclass
