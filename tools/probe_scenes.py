@@ -89,13 +89,16 @@ def run_one(seed: int, index: int, share: float) -> dict:
 OTHER_KERNELS = ("SandyBridge", "Prescott")
 
 
-def under_kernels(seed: int, index: int, share: float, kernel_set: str) -> float | None:
+def under_kernels(seed: int, index: int, share: float, kernel_set: str, timeout: float = 600.0) -> float | None:
     """Scene `index`'s energy residual run again in a fresh process under another OpenBLAS kernel set (None if it
-    does not finish there)."""
+    does not finish there within `timeout` seconds)."""
     env = dict(os.environ, **{kernels.PINS["openblas"].override: kernel_set})
     command = [sys.executable, "-m", "impact.kernels", __file__, "--reproduce", str(seed), str(index),
                "--yielding", str(share)]
-    done = subprocess.run(command, env=env, capture_output=True, text=True, check=False)
+    try:
+        done = subprocess.run(command, env=env, capture_output=True, text=True, check=False, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return None
     text = done.stdout[done.stdout.find("\n{") + 1:] if done.returncode == 0 else ""
     return json.loads(text).get("energy_residual") if text.startswith("{") else None
 
