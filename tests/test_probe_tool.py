@@ -41,3 +41,11 @@ def test_a_scene_run_again_under_the_studys_own_kernels_in_a_fresh_process_balan
     here = tool.run_one(seed, index, share)["energy_residual"]
     there = tool.under_kernels(seed, index, share, ours)
     assert here is not None and there == here
+
+
+def test_a_budget_stop_is_laid_at_the_unit_that_spent_the_budget(tool):
+    """Probe scene 2141162396-988 stopped at the wall of a plastic pendulum (e = 0, a 0.17 mm gap), where the run's
+    event budget ran out; a perfectly elastic CID in a gap of 0.22 micrometres made most of its impacts."""
+    spent = tool.budget_spender(2141162396, 988, 0.25)
+    assert (spent["kind"], spent["e"]) == ("cid", 1.0) and spent["gap_m"] < 1e-6
+    assert spent["share_of_recorded_impacts"] > 0.4

@@ -20,9 +20,10 @@ is drawn from ``numpy.random.default_rng([s, i, 1])`` if so, else from ``default
 elastic scenes are the ones it drew before yielding buildings existed), then its yielding scenes by their
 post-yield stiffness nearest zero (bands of |b k - P/h| / k, with the energy breaks in each: near zero the exact
 flow loses digits, docs/model.md), then the worst energy breaks run again under other OpenBLAS kernel sets (a break
-whose residual changes sign or spreads as wide as itself when only the round-off changes is round-off, and says so),
-and writes them all to ``--out`` (JSON).  A scene that runs past ``--timeout`` seconds is a break of its own ("over
-the time bound").
+whose residual changes sign or spreads as wide as itself when only the round-off changes is round-off, and says so)
+and the unit that spent the event budget of the first runs it stopped (the stop names the element whose event the
+budget ran out at), and writes them all to ``--out`` (JSON).  A scene that runs past ``--timeout`` seconds is a
+break of its own ("over the time bound").
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ import secrets
 import subprocess
 import sys
 import time
-from collections import defaultdict
+from collections import Counter, defaultdict
 from pathlib import Path
 
 from impact import kernels
@@ -126,6 +127,24 @@ def energy_sensitivity(runs: list[dict], seed: int, share: float, worst: int = 1
         out.append({"index": run["index"], "study_kernels": run["energy_residual"], **others,
                     "verdict": sensitivity(residuals)})
     return out
+
+
+def budget_spender(seed: int, index: int, share: float, kept: int = 200_000) -> dict:
+    """Which unit spent a run's event budget: the run again with its first `kept` impacts recorded, and the unit
+    with the most of them (a budget stop names the element whose event the budget ran out at, which need not be
+    the one whose events spent it)."""
+    scene, _ = scene_of(seed, index, share)
+    recorded = simulate(scene, measures=("impacts", "records"), record=kept).records["unit"].astype(int)
+    unit, count = Counter(recorded.tolist()).most_common(1)[0]
+    _, damper = scene.unit_list()[unit]
+    return {"index": index, "unit": unit, "kind": damper.kind, "e": damper.e, "gap_m": damper.gap,
+            "share_of_recorded_impacts": count / len(recorded)}
+
+
+def budget_spenders(runs: list[dict], seed: int, share: float, first: int = 10) -> list[dict]:
+    """budget_spender of the first `first` runs the event budget stopped."""
+    stopped = [r["index"] for r in runs if any(b.startswith("event budget") for b in r["broke"])]
+    return [budget_spender(seed, index, share) for index in stopped[:first]]
 
 
 #: the bands of `smallest_tangent` the report counts scenes and energy breaks in (0 exactly: a perfectly plastic
@@ -271,7 +290,8 @@ def main(argv=None) -> int:
               "slowest": sorted(({"index": r["index"], "seconds": r["seconds"]} for r in runs),
                                 key=lambda r: -r["seconds"])[:10],
               "median_seconds": float(np.median(seconds)), "by_tangent": by_tangent(runs),
-              "energy_under_other_kernels": energy_sensitivity(runs, seed, args.yielding), "runs": runs}
+              "energy_under_other_kernels": energy_sensitivity(runs, seed, args.yielding),
+              "event_budget_spent_by": budget_spenders(runs, seed, args.yielding), "runs": runs}
     args.out.write_text(json.dumps(report, indent=1) + "\n")
     print(f"seed {seed}: {len(runs)} scenes ({report['yielding_scenes']} yielding), {report['broken_scenes']} broke "
           f"a promise ({report['wall_seconds']:.0f} s; reproduce one with --reproduce {seed} INDEX "
@@ -288,6 +308,11 @@ def main(argv=None) -> int:
         for e in report["energy_under_other_kernels"]:
             values = ", ".join("n/a" if e[k] is None else f"{e[k]:.2e}" for k in ("study_kernels", *OTHER_KERNELS))
             print(f"          scene {e['index']}: {values}: {e['verdict']}")
+    if report["event_budget_spent_by"]:
+        print("  who spent the event budget (the first stops, the unit with the most recorded impacts):")
+        for b in report["event_budget_spent_by"]:
+            print(f"          scene {b['index']}: unit {b['unit']} ({b['kind']}, e = {b['e']:.2f}, gap {b['gap_m']:.1e} m), "
+                  f"{b['share_of_recorded_impacts']:.0%} of the impacts")
     print(f"written to {args.out}")
     return 0
 
