@@ -85,6 +85,11 @@ def run_one(seed: int, index: int, share: float) -> dict:
             "energy_residual": residual}
 
 
+def broke(run: dict, kind: str) -> bool:
+    """Whether a run broke a promise of this kind (its break's text starts with it: "energy", "event budget")."""
+    return any(text.startswith(kind) for text in run["broke"])
+
+
 #: the kernel sets an energy break is run again under (OpenBLAS's names; the study's own is kernels.PINS'): what
 #: the residual does when only the round-off changes
 OTHER_KERNELS = ("SandyBridge", "Prescott")
@@ -117,8 +122,7 @@ def sensitivity(residuals: list[float | None]) -> str:
 
 def energy_sensitivity(runs: list[dict], seed: int, share: float, worst: int = 10) -> list[dict]:
     """The worst energy breaks, each run again under OTHER_KERNELS: its residuals and their verdict (sensitivity)."""
-    broken = [r for r in runs if r.get("energy_residual") is not None
-              and any(b.startswith("energy") for b in r["broke"])]
+    broken = [r for r in runs if r.get("energy_residual") is not None and broke(r, "energy")]
     broken.sort(key=lambda r: -abs(r["energy_residual"]))
     out = []
     for run in broken[:worst]:
@@ -143,7 +147,7 @@ def budget_spender(seed: int, index: int, share: float, kept: int = 200_000) -> 
 
 def budget_spenders(runs: list[dict], seed: int, share: float, first: int = 10) -> list[dict]:
     """budget_spender of the first `first` runs the event budget stopped."""
-    stopped = [r["index"] for r in runs if any(b.startswith("event budget") for b in r["broke"])]
+    stopped = [r["index"] for r in runs if broke(r, "event budget")]
     return [budget_spender(seed, index, share) for index in stopped[:first]]
 
 
@@ -161,7 +165,7 @@ def by_tangent(runs: list[dict]) -> list[dict]:
                "test": lambda t, lo=lo, hi=hi: lo <= t < hi and t > 0.0}
               for lo, hi in zip(TANGENT_BANDS[:-1], TANGENT_BANDS[1:])]
     return [{"band": b["band"], "scenes": sum(b["test"](r["tangent"]) for r in ran),
-             "energy_breaks": sum(b["test"](r["tangent"]) and any(x.startswith("energy") for x in r["broke"])
+             "energy_breaks": sum(b["test"](r["tangent"]) and broke(r, "energy")
                                   for r in ran)} for b in bands]
 
 
