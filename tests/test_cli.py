@@ -140,6 +140,23 @@ def test_quake_tunes_a_tmd_for_the_building_unless_told(capsys):
     assert peaks["designed"] < peaks["bare"] < peaks["untuned"], peaks
 
 
+def test_quake_gives_a_tmd_end_stops_that_hold_its_stroke(capsys):
+    """--stroke-limit-m puts stops in a TMD's travel: a stroke of 2.2 m without them (3 storeys, T1 = 2 s, El
+    Centro at 0.8 g) is held to the limit by strikes, the energy still balancing; a CID's walls are its limit."""
+    quake = ["quake", "--record", "elcentro", "--storeys", "3", "--period-s", "2", "--pga-g", "0.8", "--damper", "tmd"]
+    main(quake)
+    free = json.loads(capsys.readouterr().out)
+    main([*quake, "--stroke-limit-m", "0.3", "--e", "0.5"])
+    stopped = json.loads(capsys.readouterr().out)
+    assert free["peak_damper_stroke_m"][0] > 2.0 and free["impacts"] == 0
+    assert 0.3 * (1 - 1e-9) <= stopped["peak_damper_stroke_m"][0] <= 0.3 * (1 + 1e-9)
+    assert stopped["impacts"] > 0 and stopped["dampers"][0]["stroke_limit"] == 0.3
+    assert abs(stopped["diagnostics"]["energy_residual"]) < 1e-9
+    with pytest.raises(SystemExit):
+        main(["quake", "--record", "elcentro", "--damper", "cid", "--gap-m", "0.1", "--stroke-limit-m", "0.3"])
+    assert "--stroke-limit-m is not used by --damper cid" in capsys.readouterr().err
+
+
 def _quake(capsys, *flags) -> dict:
     main(["quake", "--record", "elcentro", "--duration-s", "8", *flags])
     return json.loads(capsys.readouterr().out)

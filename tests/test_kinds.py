@@ -1,7 +1,8 @@
 """The damper kinds' registry (impact.model.kinds): a kind made of parts the engine knows is one entry.
 
-The toy kind here, a TMD with stops (a tuned mass whose stroke walls end, which the study's TMDs lack), is
-registered in the test alone: no other file of the package names it.
+The toy kind here, a TMD with stops (a tuned mass whose stroke walls end), is registered in the test alone: no
+other file of the package names it.  The study's TMD gets its stops from a Damper field instead (stroke_limit),
+and the engine sees the same unit either way.
 """
 
 import ast
@@ -66,6 +67,34 @@ def test_a_kind_registered_alone_strikes_its_stops_within_the_engines_promises(s
     assert abs(diag["energy_residual"]) < 1e-9
     assert diag["max_penetration"] <= 1e-9 * gap
     assert diag["impact_losses"] > 0.0  # e = 0.6: each strike loses (1 - e^2) of its relative kinetic energy
+
+
+def test_a_tmd_with_a_stroke_limit_is_a_unit_with_stops_to_the_bit(stopped_tmd):
+    """Damper.stroke_limit gives a wall-less kind end stops at +-limit: the engine runs the same unit as the kind
+    registered with walls a gap of twice the limit, so every number is the same."""
+    free = simulate(_scene("tmd", 0.0), measures=("peaks",))
+    limit = 0.5 * free.peak_strokes[0]
+    scene = _scene(stopped_tmd, 2.0 * limit)
+    (toy,) = scene.dampers
+    tmd = Damper("tmd", toy.mass, e=toy.e, tuning=toy.tuning, damping=toy.damping, stroke_limit=limit)
+    stopped = simulate(Scene(scene.building, (tmd,), scene.load, duration=scene.duration, start="centre"),
+                       measures=("peaks", "impacts"))
+    toy_run = simulate(scene, measures=("peaks", "impacts"))
+    assert stopped.impacts == toy_run.impacts > 10
+    assert stopped.peak_strokes[0] <= limit * (1 + 1e-9)
+    np.testing.assert_array_equal(stopped.final_q, toy_run.final_q)
+    assert stopped.diagnostics["energy_residual"] == toy_run.diagnostics["energy_residual"]
+
+
+@pytest.mark.parametrize("fields, message", [
+    (dict(kind="cid", gap=0.1, stroke_limit=0.05), "stroke_limit is not defined for kind 'cid'"),
+    (dict(kind="tmd", stroke_limit=0.0), r"stroke_limit = 0.0 is out of range: allowed \(0.0, "),
+    (dict(kind="tmd", stroke_limit=-1.0), "stroke_limit"),
+])
+def test_a_stroke_limit_is_refused_by_name_where_it_means_nothing(fields, message):
+    kind = fields.pop("kind")
+    with pytest.raises(ParameterError, match=message):
+        Damper(kind, 1.0, **fields)
 
 
 def test_a_stage_reads_a_kind_by_its_parts(stopped_tmd):

@@ -41,7 +41,7 @@ def _quake_record(args):
 
 
 _DAMPER_FIELD = dict(gap_m="gap", e="e", rp="tuning", tuning="tuning", damping="damping", nu="nu", units="units",
-                     floor="floor")
+                     floor="floor", stroke_limit_m="stroke_limit")
 
 
 def _quake_damper_flags(args) -> dict:

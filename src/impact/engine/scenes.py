@@ -32,7 +32,7 @@ from impact.engine.diagnostics import read_diagnostics
 from impact.engine.jitcache import compile_lock
 from impact.engine.scene_loop import run_scene
 from impact.model.building import Building
-from impact.model.kinds import KINDS, DamperKind
+from impact.model.kinds import KINDS
 from impact.model.params import ParameterError
 from impact.model.scene import Contact, Damper, ForceRecord, GroundMotion, Harmonic, Scene, State
 
@@ -141,17 +141,18 @@ class StoreyResponse:
 # assembly of the kernel's arrays
 # ----------------------------------------------------------------------------
 
-def _unit_bits(kind: DamperKind) -> int:
-    """A unit's kind as the engine reads it: what it is made of (layout.UNIT_*), not its name."""
-    return (L.UNIT_WALLS if kind.walls else 0) | (L.UNIT_SPRING if kind.spring else 0)
+def _unit_bits(damper: Damper) -> int:
+    """A unit's kind as the engine reads it: what it is made of (layout.UNIT_*), not its name; a TMD's end stops
+    are walls as an impact damper's are."""
+    return (L.UNIT_WALLS if damper.has_walls else 0) | (L.UNIT_SPRING if damper.kind_spec.spring else 0)
 
 
 def _unit_arrays(scene: Scene, omega1: float):
     units = scene.unit_list()
-    kind = np.array([_unit_bits(d.kind_spec) for _, d in units], dtype=np.int64)
+    kind = np.array([_unit_bits(d) for _, d in units], dtype=np.int64)
     floor = np.array([scene.floor_index(d.floor) for _, d in units], dtype=np.int64)
     mass = np.array([d.mass / d.units for _, d in units])
-    gap = np.array([d.gap if d.has_walls else 0.0 for _, d in units])
+    gap = np.array([d.clearance for _, d in units])
     e = np.array([d.e for _, d in units])
     k = np.array([m * (d.tuning * omega1) ** 2 if d.kind_spec.spring else 0.0 for m, (_, d) in zip(mass, units)])
     c = np.array([2.0 * m * d.damping * d.tuning * omega1 if d.kind_spec.dashpot else 0.0
@@ -218,7 +219,7 @@ def _monitors(scene: Scene, nfull: int, peaks=PEAK_GROUPS):
         r[scene.floor_index(d.floor)] -= 1.0
         rows.append(r)
         kinds.append(L.MON_DISP)
-        caps.append(0.5 * d.gap if d.has_walls else math.inf)
+        caps.append(0.5 * d.clearance if d.has_walls else math.inf)
         first += int(d.units)
     caps = np.array(caps)
     for part in _unasked(nf, peaks):

@@ -116,12 +116,14 @@ class Damper:
     kind     a kind of model.kinds.KINDS: CID (free mass between walls), PID (pendulum), TMD (spring, dashpot)
     mass     total mass of the damper (all units together)
     gap      total clearance d of each unit (CID, PID)
-    e        coefficient of restitution (CID, PID)
+    e        coefficient of restitution (CID, PID; a TMD's end stops)
     tuning   natural frequency of the pendulum (PID, r') or of the TMD (f) over the building's fundamental one
     damping  damping ratio of the pendulum (PID, optional) or of the TMD
     floor    floor it is attached to, 1 (lowest) to N; None: the roof
     nu       Coulomb friction coefficient under a CID's mass
     units    n identical units of mass mass/n (Bapat & Sankar's multi-unit damper)
+    stroke_limit  a kind without walls (TMD): the stroke from its rest place at which its mass meets end stops
+    (a built TMD's travel is bounded), struck as an impact damper's walls are, with restitution e; None: no stops
     """
 
     kind: str
@@ -134,6 +136,7 @@ class Damper:
     floor: int | None = None
     nu: float = 0.0
     units: int = 1
+    stroke_limit: float | None = None
 
     def __post_init__(self):
         check_choice("kind", self.kind, damper_kinds())  # the registry as it is now: a kind added later counts
@@ -148,6 +151,11 @@ class Damper:
             raise ParameterError(f"gap is not defined for kind {self.kind!r} (a {kind.title} has no walls): leave "
                                  "it at 0")
         _check_floor("floor", self.floor)
+        if self.stroke_limit is not None:
+            if kind.walls:
+                raise ParameterError(f"stroke_limit is not defined for kind {self.kind!r}: its walls limit its "
+                                     "stroke to half its gap")
+            check_fields(self, stroke_limit="(0, 1e6]")
 
     @property
     def kind_spec(self) -> DamperKind:
@@ -156,7 +164,15 @@ class Damper:
 
     @property
     def has_walls(self) -> bool:
-        return self.kind_spec.walls
+        """Whether its units strike: its kind's walls, or a wall-less kind's end stops."""
+        return self.kind_spec.walls or self.stroke_limit is not None
+
+    @property
+    def clearance(self) -> float:
+        """The distance between a unit's walls (or end stops) that its mass travels in: 0 where it has none."""
+        if self.kind_spec.walls:
+            return self.gap
+        return 0.0 if self.stroke_limit is None else 2.0 * self.stroke_limit
 
 
 @dataclass(frozen=True, eq=False)
@@ -335,7 +351,7 @@ class Scene:
         if len(starts) != len(units):
             raise ParameterError(f"unit_starts has {len(starts)} values for {len(units)} damper units: give one per unit")
         for k, (x, (_, d)) in enumerate(zip(starts, units)):
-            half = 0.5 * d.gap if d.has_walls else 0.0
+            half = 0.5 * d.clearance
             _check(f"unit_starts[{k}]", x, -half, half)
         object.__setattr__(self, "unit_starts", starts)
 
@@ -352,7 +368,7 @@ class Scene:
                                  f"{len(units)} contacts")
         for k, (c, (_, d)) in enumerate(zip(state.contacts, units)):
             stroke = state.q[self.building.storeys + k] - state.q[self.floor_index(d.floor)]
-            half = 0.5 * d.gap if d.has_walls else math.inf
+            half = 0.5 * d.clearance if d.has_walls else math.inf
             if abs(stroke) > half * (1.0 + 1e-12):
                 raise ParameterError(f"initial.q: unit {k}'s stroke {stroke:g} is beyond its walls: allowed "
                                      f"[{-half:g}, {half:g}]")
