@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -292,6 +293,44 @@ def test_random_scenes_on_yielding_buildings_run_to_the_end_exactly():
     assert failures == []
     assert len(_beyond_the_draw(refused)) <= YIELD_PROBE_SCENES // 20, refused
     assert yielded >= YIELD_PROBE_SCENES // 2  # the draw reaches the yielding branches, not only the elastic ones
+
+
+STOPS_PROBE_SCENES = 60
+
+
+def _with_stops(scene: Scene, scale: float, rng) -> Scene:
+    """The scene with each wall-less damper given end stops, from far inside its motion to beyond it, struck with
+    any restitution."""
+    def stopped(d):
+        e = float(rng.choice([0.0, 1.0, rng.uniform(0, 1)]))
+        return replace(d, stroke_limit=scale * float(10 ** rng.uniform(-4, 1)), e=e)
+    return replace(scene, dampers=tuple(d if d.has_walls else stopped(d) for d in scene.dampers))
+
+
+def test_random_scenes_with_a_tmd_between_end_stops_keep_every_promise():
+    """The probe's draws (a third on yielding buildings) whose TMDs get end stops (Damper.stroke_limit), which the
+    seeded probe's draws leave out: a unit with a spring, a dashpot and walls, which no probe kind has together.
+    Each scene keeps the probe's promises, and most strike their stops."""
+    from probe import SAMPLES, draw_scene, draw_yielding_scene, violations
+
+    rng = np.random.default_rng([PROBE_SEED, 2])
+    failures, struck = [], 0
+    for i in range(STOPS_PROBE_SCENES):
+        draw = draw_yielding_scene if i % 3 == 0 else draw_scene
+        try:
+            scene, scale = draw(rng, seconds=1.0)
+        except ParameterError:
+            continue
+        if all(d.has_walls for d in scene.dampers):
+            continue
+        scene = _with_stops(scene, scale, rng)
+        result = simulate(scene, measures=("peaks", "samples", "impacts"),
+                          times=np.linspace(0.0, scene.t_end, SAMPLES))
+        struck += result.impacts > 0
+        if problems := violations(scene, scale, result):
+            failures.append((i, problems))
+    assert failures == []
+    assert struck >= 10
 
 
 def test_a_half_row_starts_where_its_full_row_does():

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
+import xarray as xr
 from scipy import signal
 from test_scene import _linear_roof
 
@@ -36,7 +39,8 @@ SAMPLE_KEYS = ("fema-farfield:1:a", "fema-farfield:12:b", "fema-farfield:22:a",
                "fema-nearfield:2:a", "fema-nearfield:14:b", "fema-nearfield:20:a")
 LOADS = {"storeys": [1, 3], "periods_s": [1.0], "zeta": 0.02, "mass_ratios": [0.02], "e": 0.25}
 IDA = {"suites": ["farfield", "nearfield"], "motions": ["fema-farfield:3:a", "fema-nearfield:1:b"],
-       "sa_g": [0.1, 0.4], "design_sa_g": 0.4, "storey_height_m": 3.0, "drift_limits": [0.005, 0.01],
+       "sa_g": [0.1, 0.4], "design_sa_g": 0.4, "storey_height_m": 3.0, "stroke_limit_m": 1.0,
+       "drift_limits": [0.005, 0.01],
        "verdict": {"improve": 0.1, "worsen": 0.05, "bootstrap": 300, "interval": 0.9, "seed": 1}}
 
 
@@ -139,6 +143,38 @@ def test_the_bare_building_and_the_tmd_scale_exactly_with_the_level(kind):
     assert np.all(np.abs(direct["energy_residual"]) <= 1e-9)
 
 
+def test_a_tmd_with_stops_scales_where_they_are_out_of_reach_and_runs_where_they_are_struck():
+    """Stops at the scaled stroke of the middle level: the levels below it are the free TMD's 1 g run scaled, the
+    others are run with the stops and strike them; every level as a direct run with the stops gives."""
+    building = buildings.make_building(LOADS, "s3_T1")
+    rec = load_suite_record(SAMPLE_KEYS[3])
+    sa = spectral_acceleration(rec, building.period1)
+    levels = [0.05, 0.3, 0.7, 1.5]
+    run_with = lambda dampers, lv: IR.measure(building, dampers, IR.scaled_motion(rec, sa, lv), 3.0)  # noqa: E731
+    free_stroke = run_with((tuned_for(building, 0.02),), 1.0)["stroke"]
+    stopped = replace(tuned_for(building, 0.02), stroke_limit=0.5 * free_stroke, e=0.25)
+    ladder = IR.ladder_of(building, (stopped,), run_with, levels)
+    direct = IR.over_ladder(lambda lv: run_with((stopped,), lv), levels, linear=False)
+    assert list(direct["impacts"] > 0) == [False, False, True, True]
+    assert np.all(direct["stroke"] <= stopped.stroke_limit * (1 + 1e-9))
+    for name in IP.MEASURES:
+        np.testing.assert_allclose(ladder[name], direct[name], rtol=1e-12, atol=1e-14 if name == "energy_residual"
+                                   else 0, equal_nan=True, err_msg=name)
+    assert np.all(np.abs(direct["energy_residual"]) <= 1e-9)
+
+
+def test_the_designs_keep_their_strokes_within_the_limit():
+    """A TMD's stops sit at the limit; an impact damper's clearance is twice it at most, and its design below."""
+    building = buildings.make_building(LOADS, "s3_T1")
+    tmd = IR.designed_damper(LOADS, IDA, building, "tmd", 0.02, {}, 0.3)
+    assert (tmd.stroke_limit, tmd.e, tmd.tuning) == (1.0, LOADS["e"], tuned_for(building, 0.02).tuning)
+    assert IR.designed_damper(LOADS, IDA, building, "cid", 0.02, {0.02: 4.0}, 0.6).gap == 2.0   # 2.4 designed
+    assert IR.designed_damper(LOADS, IDA, building, "pid", 0.02, {0.02: 4.0}, 0.3).gap == pytest.approx(1.2)
+    unlimited = {**IDA, "stroke_limit_m": None}
+    assert IR.designed_damper(LOADS, unlimited, building, "tmd", 0.02, {}, 0.3).stroke_limit is None
+    assert IR.designed_damper(LOADS, unlimited, building, "cid", 0.02, {0.02: 4.0}, 1.0).gap == 4.0
+
+
 @pytest.fixture(scope="module")
 def study():
     bare = {b: IR.bare_runs(IDA, LOADS, b) for b in IP.stage_buildings(LOADS)}
@@ -194,6 +230,25 @@ def test_verdicts_count_helped_and_harmed_motions_and_bracket_the_median(study):
         assert row.median_reduction == pytest.approx(float(np.median(1 - r)))
         assert row.reduction_low <= row.median_reduction <= row.reduction_high
         assert row.share_lowered == float(np.mean(r <= 0.9)) and row.share_raised == float(np.mean(r > 1.05))
+        stroke = ds["stroke"].sel(building=row.building, damper=row.damper, mass_ratio=row.mass_ratio,
+                                  level=0.4).values[ds["group"].values == row.group]
+        assert row.median_stroke_m == float(np.median(stroke)) <= IDA["stroke_limit_m"] * (1 + 1e-9)
+    # a limit below every stroke counts every run at it; the 1 m limit, on these 1 s buildings at 0.4 g, none
+    tight = IT.verdicts(ds, {**IDA, "stroke_limit_m": 1e-6}, 0.4)
+    assert set(tight.share_at_stroke_limit) == {1.0}
+    assert set(table.share_at_stroke_limit) == {0.0}
+
+
+def test_the_collected_runs_share_one_configuration_but_the_designs_keys_bare_runs_lack():
+    def run(**ida):
+        params = {"ida": {"storey_height_m": 3.0, **ida}, "loads": {"e": 0.25}}
+        return xr.Dataset(attrs={"config": json.dumps(params, sort_keys=True)})
+
+    damped = run(storey_height_m=3.0, design_sa_g=0.4, stroke_limit_m=1.0)
+    assert IT.run_config({"s1": run()}, {("s1", "cid"): damped}) == damped.attrs["config"]
+    for bare, other in ((run(storey_height_m=4.0), damped), (run(), run(design_sa_g=0.4, stroke_limit_m=2.0))):
+        with pytest.raises(ValueError, match="different configurations"):
+            IT.run_config({"s1": run(), "s3": bare}, {("s1", "cid"): damped, ("s1", "tmd"): other})
 
 
 def test_the_bootstrap_resamples_whole_records():

@@ -325,6 +325,16 @@ def test_an_engine_edit_reruns_exactly_the_jobs_whose_scripts_reach_it(smoke):
     assert not {"tmd_optimum", "masri_chart"} & planned
 
 
+def test_a_change_of_the_dampers_stroke_limit_reruns_their_runs_and_not_the_bare_ones(smoke, tmp_path):
+    """ida.stroke_limit_m is read by the dampers' designs alone (ida.plan.DESIGN_KEYS): the damper runs of the ida
+    and collapse stages are outdated for their params, the bare runs are not."""
+    override = tmp_path / "stroke.yaml"
+    override.write_text("ida:\n  stroke_limit_m: 0.05\n")
+    out = _snakemake(smoke, "-n", "--configfile", "config/smoke.yaml", str(override)).stdout
+    assert _rules_whose_params_changed(out) == {"ida_damper", "collapse_damper"}
+    assert not {"ida_bare", "collapse_bare"} & set(_job_stats(out))
+
+
 def _rules_whose_params_changed(out: str) -> set[str]:
     """The rules of a dry run's jobs whose reason is a change of params."""
     rules = set()

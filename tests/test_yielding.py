@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -278,10 +279,12 @@ def test_quake_and_pushover_take_the_yield_flags_and_name_a_bad_one(capsys):
 def test_the_ida_scales_a_run_only_for_a_linear_damper_on_an_elastic_building():
     from impact.stages.ida.plan import scales_linearly
     elastic = Building.uniform(3, 1.0, 0.05)
-    assert scales_linearly(elastic, "bare") and scales_linearly(elastic, "tmd")
-    assert not scales_linearly(elastic, "cid")
-    assert not scales_linearly(elastic.yielding(0.02), "bare")
-    assert not scales_linearly(elastic.yielding(0.02, 0.1, storey_height=3.0, p_delta=True), "tmd")
+    tmd, cid = Damper("tmd", 1e3, tuning=0.98), Damper("cid", 1e3, gap=0.1, e=0.5)
+    assert scales_linearly(elastic, ()) and scales_linearly(elastic, (tmd,))
+    assert not scales_linearly(elastic, (cid,))
+    assert not scales_linearly(elastic, (replace(tmd, stroke_limit=0.5),))  # its end stops strike
+    assert not scales_linearly(elastic.yielding(0.02), ())
+    assert not scales_linearly(elastic.yielding(0.02, 0.1, storey_height=3.0, p_delta=True), (tmd,))
 
 
 def test_a_softening_pushover_loses_its_strength_where_the_closed_form_says():

@@ -22,7 +22,7 @@ rule collapse_bare:
         mem_mb=2000,
     params:
         library=library("collapse_bare"),
-        study=collapse_params,
+        study=collapse_bare_params,
     script:
         "../scripts/collapse_bare.py"
 

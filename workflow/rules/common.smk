@@ -255,19 +255,36 @@ def loads_params(wildcards):
 
 
 def ida_params(wildcards):
-    """What the stage's runs depend on: its section but the verdicts' and fits' settings, and the loads keys it uses."""
+    """What the stage's damper runs depend on: its section but the verdicts' and fits' settings, and the loads keys
+    it uses."""
     kept = {key: value for key, value in IDA.items() if key not in ("verdict", "drift_limits")}
     return {"ida": kept, "loads": shared_keys(LOADS)}
 
 
+def ida_bare_params(wildcards):
+    """What the bare runs depend on: the damper runs' keys but the dampers' designs'."""
+    return bare_of(ida_params(wildcards))
+
+
 def collapse_params(wildcards):
-    """What the stage's runs depend on: its section but the tables' settings, and the ida and loads keys it uses."""
+    """What the stage's damper runs depend on: its section but the tables' settings, and the ida and loads keys it
+    uses."""
     kept = {key: value for key, value in COLLAPSE.items() if key not in ("ratings", "verdict")}
     return {
         "collapse": kept,
         "ida": {key: IDA[key] for key in collapse.IDA_KEYS},
         "loads": shared_keys(LOADS),
     }
+
+
+def collapse_bare_params(wildcards):
+    """What the bare archetype's runs depend on: the damper runs' keys but the dampers' designs'."""
+    return bare_of(collapse_params(wildcards))
+
+
+def bare_of(params):
+    """A damper rule's params without the ida keys only a damper's design reads (ida.DESIGN_KEYS)."""
+    return params | {"ida": {k: v for k, v in params["ida"].items() if k not in ida.DESIGN_KEYS}}
 
 
 def ida_design(wildcards):

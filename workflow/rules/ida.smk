@@ -20,7 +20,7 @@ rule ida_bare:
         mem_mb=2000,
     params:
         library=library("ida_bare"),
-        study=ida_params,
+        study=ida_bare_params,
     script:
         "../scripts/ida_bare.py"
 

@@ -3,8 +3,8 @@
 A kind is what its units are made of, not a name the engine branches on: a mass between walls a gap apart
 (the CID), held by a spring tuned to the building (the PID's pendulum, the TMD's spring), with a dashpot, on a
 floor it may slide on.  The engine builds a unit's arrays from these properties alone, so a new kind made of
-the same parts (a TMD with stops, a damped pendulum) is one entry here; one with new physics is an entry and
-that physics in the engine.
+the same parts (a tuned mass between walls, a damped pendulum) is one entry here; one with new physics is an
+entry and that physics in the engine.
 """
 
 from __future__ import annotations
@@ -78,11 +78,6 @@ def either(names) -> str:
 def impact_kinds() -> tuple[str, ...]:
     """The kinds with walls, whose units strike."""
     return kinds_with("walls")
-
-
-def linear_kinds() -> tuple[str, ...]:
-    """The kinds without walls: their units never strike, so a run with them alone is linear in its load."""
-    return tuple(name for name, k in KINDS.items() if not k.walls)
 
 
 def sliding_kinds() -> str:

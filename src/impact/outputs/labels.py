@@ -52,6 +52,7 @@ COLUMNS = {
     "sa_g": "Sa(T1) (g)", "mass_ratio": "mass ratio", "median_reduction": "median reduction",
     "reduction_low": "reduction, 5 %", "reduction_high": "reduction, 95 %", "share_lowered": "share helped",
     "share_raised": "share harmed", "theta_sa_g": "median capacity θ (g)", "drift_limit": "drift limit",
+    "median_stroke_m": "median stroke (m)", "share_at_stroke_limit": "share at the stroke limit",
     "pga_g": "PGA (g)", "intensity": "PGA (g)", "intensity_g": "PGA (g)",
 }
 

@@ -11,12 +11,14 @@ from impact.model.building import Building
 from impact.model.params import G_GRAV, ParameterError
 from impact.model.scene import DAMPER_KINDS
 from impact.stages.buildings import buildings, make_building
+from impact.stages.ida.plan import DESIGN_KEYS
 
 #: the cases of one archetype: the bare building, then each damper type
 CASES = ("bare", *DAMPER_KINDS)
 #: what the stage reads from the linear IDA's and the earthquake study's sections: its buildings, record set and
-#: damper designs are theirs (the IDA's ground motions reach it through the IDA's bare runs, its input)
-IDA_KEYS = ("design_sa_g", "storey_height_m")
+#: damper designs are theirs (the IDA's ground motions reach it through the IDA's bare runs, its input); the bare
+#: archetype reads the IDA's keys but its damper designs' (ida.plan.DESIGN_KEYS)
+IDA_KEYS = ("storey_height_m", *DESIGN_KEYS)
 
 
 def storey_heights(ida: dict, storeys: int) -> np.ndarray:

@@ -19,7 +19,7 @@ from impact.outputs.files import as_integers, flag
 from impact.outputs.labels import EVENT_CAP_MEANINGS
 from impact.stages.collapse.p695 import archetype_numbers
 from impact.stages.collapse.plan import archetype, code_period, hunt_levels, stability_coefficients, stability_limit
-from impact.stages.ida.runs import design_peak, designed_damper, scaled_motion
+from impact.stages.ida.runs import STROKE_LIMIT_ATTRS, design_peak, designed_damper, scaled_motion
 
 INITIAL_CONDITION = ("building at rest with no plastic drift; an impact damper's mass centred between its walls; "
                      "every run of a ground motion starts so")
@@ -305,9 +305,13 @@ def damper_collapse(cfg: dict, ida: dict, loads: dict, building_name: str, kind:
     motion's hunt started at the `bare` archetype's bracket (`trace`)."""
     building = archetype(cfg, ida, loads, building_name)
     peak = design_peak(ida_bare, ida["design_sa_g"])
-    parts = [traced(cfg, building, (designed_damper(loads, building, kind, mr, gap_ratios, peak),), ida_bare, bare)
-             for mr in loads["mass_ratios"]]
+    designs = [designed_damper(loads, ida, building, kind, mr, gap_ratios, peak) for mr in loads["mass_ratios"]]
+    parts = [traced(cfg, building, (damper,), ida_bare, bare) for damper in designs]
     ds = xr.concat(parts, dim="mass_ratio", join="outer", coords="minimal",
                    compat="override").assign_coords(mass_ratio=list(loads["mass_ratios"]))
     ds["mass_ratio"].attrs = {"long_name": "damper mass over the building's total mass", "units": "1"}
+    ds["clearance"] = ("mass_ratio", [d.clearance for d in designs],
+                       {"long_name": "distance between a damper unit's walls or end stops (0: none)", "units": "m"})
+    if ida["stroke_limit_m"] is not None:
+        ds["stroke_limit"] = ((), ida["stroke_limit_m"], STROKE_LIMIT_ATTRS)
     return _described(ds, cfg, building_name, building, kind).assign_attrs(hunt=HUNT_FROM_BARE)

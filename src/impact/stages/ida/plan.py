@@ -3,7 +3,6 @@ configuration.  Nothing here runs the engine."""
 
 from __future__ import annotations
 
-from impact.model.kinds import linear_kinds
 from impact.model.params import ParameterError
 from impact.model.records import RecordError
 from impact.model.scene import DAMPER_KINDS
@@ -13,14 +12,16 @@ from impact.stages.buildings import buildings
 
 #: the cases of one building: the bare building, then each damper type
 KINDS = ("bare", *DAMPER_KINDS)
-#: the cases linear on an elastic building, run once at Sa(T1) = 1 g and scaled to every level
-LINEAR = ("bare", *linear_kinds())
+#: the section's keys only the dampers' designs read (their clearance's level, their stroke limit): a change of one
+#: reruns the damper runs, not the bare ones
+DESIGN_KEYS = ("design_sa_g", "stroke_limit_m")
 
 
-def scales_linearly(building, kind: str) -> bool:
-    """Whether a case's response is linear in the level: a linear damper (LINEAR) on an elastic building; a building
-    that yields or feels P-delta is run at every level."""
-    return building.is_elastic and kind in LINEAR
+def scales_linearly(building, dampers: tuple) -> bool:
+    """Whether a case's response is linear in the level, so that one run at Sa(T1) = 1 g scales to every level: an
+    elastic building whose dampers never strike (none has walls or end stops).  A building that yields or feels
+    P-delta is run at every level."""
+    return building.is_elastic and not any(d.has_walls for d in dampers)
 
 
 def motions(cfg: dict) -> list[str]:

@@ -4,6 +4,7 @@ motion's Sa(T1)), then each damper type at its design over the ladder."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import xarray as xr
@@ -23,6 +24,8 @@ from impact.stages.buildings import impact_damper, make_building
 from impact.stages.ida.plan import MEASURES, SCALED, WHOLE, ladder, motions, scales_linearly
 
 INITIAL_CONDITION = "building and damper at rest; an impact damper's mass centred between its walls"
+STROKE_LIMIT_ATTRS = {"long_name": "largest stroke of a damper's mass from its rest place that the building houses: "
+                                   "a TMD's end stops, half an impact damper's clearance at most", "units": "m"}
 
 
 def scaled_motion(record: Record, sa_record_g: float, level_g: float) -> GroundMotion:
@@ -49,6 +52,37 @@ def over_ladder(run_at, levels: list[float], linear: bool) -> dict:
     scale = np.asarray(levels, dtype=float)
     return {name: unit[name] * scale if name in SCALED else np.full(len(levels), float(unit[name]))
             for name in MEASURES}
+
+
+#: how far inside its stops a scaled stroke must stay for the run without stops to stand for the run with them:
+#: far above the certified peak's round-off (1e-12 of it) and the scaling's (tested exact to 1e-12)
+STOP_MARGIN = 1e-9
+
+
+def within_stops(free_at, stopped_at, levels: list[float], stroke_limit: float) -> dict:
+    """A damper linear but for its end stops, over the ladder: its run without stops at 1 g, scaled, stands for each
+    level where that stroke stays inside the stops (they are never struck there, so the run with them is the same
+    motion); the other levels run with the stops."""
+    out = over_ladder(free_at, levels, linear=True)
+    struck = [i for i, stroke in enumerate(out["stroke"]) if stroke >= stroke_limit * (1.0 - STOP_MARGIN)]
+    if struck:
+        runs = over_ladder(stopped_at, [levels[i] for i in struck], linear=False)
+        for name in MEASURES:
+            out[name][struck] = runs[name]
+    return out
+
+
+def ladder_of(building: Building, dampers: tuple, run_with, levels: list[float]) -> dict:
+    """measure -> values over the ladder of one case, run as seldom as exactness allows: a linear case once, scaled;
+    one linear but for a damper's end stops, scaled where they are out of reach; the others at every level.
+    run_with(dampers, level) is one run's measures."""
+    if scales_linearly(building, dampers):
+        return over_ladder(lambda level: run_with(dampers, level), levels, linear=True)
+    free = tuple(replace(d, stroke_limit=None) for d in dampers)
+    if len(dampers) == 1 and dampers[0].stroke_limit is not None and scales_linearly(building, free):
+        return within_stops(lambda level: run_with(free, level), lambda level: run_with(dampers, level), levels,
+                            dampers[0].stroke_limit)
+    return over_ladder(lambda level: run_with(dampers, level), levels, linear=False)
 
 
 def _suite(cfg: dict) -> dict[str, Record]:
@@ -78,10 +112,7 @@ def bare_runs(cfg: dict, loads: dict, building_name: str) -> xr.Dataset:
     building = make_building(loads, building_name)
     levels, records = ladder(cfg), _suite(cfg)
     sa = {key: spectral_acceleration(rec, building.period1) for key, rec in records.items()}
-    columns = [over_ladder(lambda level, key=key: measure(building, (), scaled_motion(records[key], sa[key], level),
-                                                           cfg["storey_height_m"]), levels,
-                               linear=scales_linearly(building, "bare"))
-               for key in records]
+    columns = [ladder_of(building, (), _runner(building, records[key], sa[key], cfg), levels) for key in records]
     ds = _stack(columns, list(records), levels)
     ds["sa_record"] = ("motion", np.array([sa[k] for k in records]),
                        {"long_name": "Sa(T1, 5 %) of the ground motion as recorded, over standard gravity (Sa in g)",
@@ -102,13 +133,25 @@ def design_peak(bare: xr.Dataset, design_sa_g: float) -> float:
     return float(bare["peak_roof"].sel(level=design_sa_g).median())
 
 
-def designed_damper(loads: dict, building: Building, kind: str, mass_ratio: float, gap_ratios: dict[float, float],
-                    peak: float):
+def _runner(building: Building, record: Record, sa_record_g: float, cfg: dict):
+    """run_with(dampers, level): the measures of one run of the building with `dampers` under the record scaled to
+    the level."""
+    return lambda dampers, level: measure(building, dampers, scaled_motion(record, sa_record_g, level),
+                                          cfg["storey_height_m"])
+
+
+def designed_damper(loads: dict, ida: dict, building: Building, kind: str, mass_ratio: float,
+                    gap_ratios: dict[float, float], peak: float):
     """The earthquake study's design of one damper: a TMD Den Hartog-tuned to the first mode; an impact damper with
-    the clearance its design gap ratio times the bare building's median peak roof displacement at the design level."""
+    the clearance its design gap ratio times the bare building's median peak roof displacement at the design level.
+    Each within ida's stroke limit (none when null), as a building could house it: an impact damper's clearance is
+    twice the limit at most; a TMD's travel ends at stops at the limit, struck with the impact dampers' restitution."""
+    limit = ida["stroke_limit_m"]
     if not kind_of(kind).walls:
-        return tuned_for(building, mass_ratio)
-    return impact_damper(kind, building, mass_ratio, gap_ratios[mass_ratio] * peak, loads["e"])
+        tmd = tuned_for(building, mass_ratio)
+        return tmd if limit is None else replace(tmd, stroke_limit=limit, e=loads["e"])
+    gap = gap_ratios[mass_ratio] * peak
+    return impact_damper(kind, building, mass_ratio, gap if limit is None else min(gap, 2.0 * limit), loads["e"])
 
 
 def damper_runs(cfg: dict, loads: dict, building_name: str, kind: str, bare: xr.Dataset,
@@ -122,22 +165,23 @@ def damper_runs(cfg: dict, loads: dict, building_name: str, kind: str, bare: xr.
     peak = design_peak(bare, cfg["design_sa_g"])
     parts = []
     for mr in loads["mass_ratios"]:
-        damper = designed_damper(loads, building, kind, mr, gap_ratios, peak)
-        columns = [over_ladder(lambda level, key=key: measure(building, (damper,),
-                                                               scaled_motion(records[key], sa[key], level),
-                                                               cfg["storey_height_m"]), levels,
-                               linear=scales_linearly(building, kind))
+        damper = designed_damper(loads, cfg, building, kind, mr, gap_ratios, peak)
+        columns = [ladder_of(building, (damper,), _runner(building, records[key], sa[key], cfg), levels)
                    for key in records]
         part = _stack(columns, list(records), levels)
         if kind_of(kind).walls:
-            part["gap"] = ((), damper.gap, {"long_name": "clearance of each impact damper unit", "units": "m"})
-            part["gap_ratio"] = ((), gap_ratios[mr], {"long_name": "clearance over the bare building's median peak "
-                                                                   "roof displacement at the design level",
+            part["gap"] = ((), damper.gap, {"long_name": "clearance of each impact damper unit: the design gap ratio "
+                                                         "times the design peak, at most twice the stroke limit",
+                                            "units": "m"})
+            part["gap_ratio"] = ((), gap_ratios[mr], {"long_name": "design clearance over the bare building's median "
+                                                                   "peak roof displacement at the design level",
                                                       "units": "1"})
         parts.append(part)
     ds = xr.concat(parts, dim="mass_ratio").assign_coords(mass_ratio=list(loads["mass_ratios"]))
     ds["mass_ratio"].attrs = {"long_name": "damper mass over the building's total mass", "units": "1"}
     ds = ds.assign_coords(group=bare["group"])
+    if cfg["stroke_limit_m"] is not None:
+        ds["stroke_limit"] = ((), cfg["stroke_limit_m"], STROKE_LIMIT_ATTRS)
     return _described(ds, cfg, building_name, building, kind)
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -11,8 +12,12 @@ from scipy import optimize, stats
 
 from impact.model.scene import DAMPER_KINDS
 from impact.model.suites import GROUPS, record_of
+from impact.stages.ida.plan import DESIGN_KEYS
 from impact.stages.resampling import cluster_draws
 
+#: how near the stroke limit a certified peak stroke counts as reaching it: a stop's or wall's contact tolerance and
+#: the peak's round-off are both far below (1e-12 of the stroke)
+STROKE_AT_LIMIT = 1e-9
 #: the bare building's measures kept beside the damped ones in the collected dataset
 BARE_KEPT = ("drift_ratio", "peak_roof", "peak_accel", "energy_residual")
 
@@ -39,16 +44,34 @@ def collect(bare: dict, dampers: dict) -> xr.Dataset:
     ds["building"].attrs = {"long_name": "building: storeys and fundamental period"}
     ds["damper"].attrs = {"long_name": "damper type"}
     first = bare[names[0]].attrs
-    configs = {piece.attrs.get("config") for piece in [*bare.values(), *dampers.values()]}
-    if len(configs) > 1:
-        raise ValueError("ida: the runs were made with different configurations")
+    config = run_config(bare, dampers)
     ds.attrs = {"title": f"Incremental dynamic analysis on the FEMA P695 suites: {len(names)} buildings, bare and "
                          f"with {len(kinds)} dampers, {ds.sizes['motion']} ground motions, {ds.sizes['level']} levels",
                 "buildings": ", ".join(names), "dampers": ", ".join(kinds),
                 "storey_height_m": first["storey_height_m"], "zeta": first["zeta"],
                 "initial_condition": first["initial_condition"],
-                **({"config": configs.pop()} if None not in configs else {})}
+                **({"config": config} if config is not None else {})}
     return ds
+
+
+def run_config(bare: dict, dampers: dict) -> str | None:
+    """The configuration the runs were made with (a damper run's; a bare run's is the same without the keys only
+    the dampers' designs read, plan.DESIGN_KEYS), None where a run carries none; ValueError where they differ."""
+    damped = {piece.attrs.get("config") for piece in dampers.values()}
+    plain = {piece.attrs.get("config") for piece in bare.values()}
+    if len(damped) > 1 or len(plain) > 1 or (damped and {_bare_view(c) for c in damped} != plain):
+        raise ValueError("ida: the runs were made with different configurations")
+    config = (damped or plain).pop()
+    return None if config is None or None in plain else config
+
+
+def _bare_view(config: str | None) -> str | None:
+    """A damper run's configuration as a bare run of the same study keeps it (outputs.files.describe's JSON)."""
+    if config is None:
+        return None
+    params = json.loads(config)
+    params["ida"] = {key: value for key, value in params["ida"].items() if key not in DESIGN_KEYS}
+    return json.dumps(params, sort_keys=True)
 
 
 def bootstrap_median(values: np.ndarray, clusters: np.ndarray, samples: int, seed: int,
@@ -61,16 +84,19 @@ def bootstrap_median(values: np.ndarray, clusters: np.ndarray, samples: int, see
 
 def verdicts(ds: xr.Dataset, cfg: dict, level: float) -> pd.DataFrame:
     """Per building, damper, mass ratio and record group at one level: the median drift reduction over the bare
-    building with its bootstrap interval over records, and the shares of ground motions it helps and harms."""
+    building with its bootstrap interval over records, the shares of ground motions it helps and harms, and the
+    damper's median stroke with the share of ground motions that took it to the stroke limit."""
     v = cfg["verdict"]
     ratio = ds["drift_over_bare"].sel(level=level)
     groups = ds["group"].values
     records = np.array([record_of(m) for m in ds["motion"].values])
+    limit = math.inf if cfg["stroke_limit_m"] is None else cfg["stroke_limit_m"] * (1.0 - STROKE_AT_LIMIT)
     rows = []
     for b in ds["building"].values:
         for kind in ds["damper"].values:
             for mr in ds["mass_ratio"].values:
                 r = ratio.sel(building=b, damper=kind, mass_ratio=mr).values
+                stroke = ds["stroke"].sel(building=b, damper=kind, mass_ratio=mr, level=level).values
                 for group in GROUPS:
                     pick = groups == group
                     if not pick.any():
@@ -81,7 +107,9 @@ def verdicts(ds: xr.Dataset, cfg: dict, level: float) -> pd.DataFrame:
                                  "median_reduction": float(np.median(1.0 - r[pick])),
                                  "reduction_low": lo, "reduction_high": hi,
                                  "share_lowered": float(np.mean(r[pick] <= 1.0 - v["improve"])),
-                                 "share_raised": float(np.mean(r[pick] > 1.0 + v["worsen"]))})
+                                 "share_raised": float(np.mean(r[pick] > 1.0 + v["worsen"])),
+                                 "median_stroke_m": float(np.median(stroke[pick])),
+                                 "share_at_stroke_limit": float(np.mean(stroke[pick] >= limit))})
     return pd.DataFrame(rows)
 
 
