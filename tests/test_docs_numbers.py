@@ -232,6 +232,7 @@ def test_the_stroke_limit_is_where_the_table_reaches_it():
     limit = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())["ida"]["stroke_limit_m"]
     says(RESULTS, f"Every damper's stroke is held to {limit:g} m either way", f"clearance is {2 * limit:g} m at most")
     says(README, f"Every damper's stroke is held to {limit:g} m either way")
+    says((ROOT / "docs" / "model.md").read_text(encoding="utf-8"), f"from its rest place ({limit:g} m in the study)")
     says(RESULTS, f"the TMD strikes its stops under {span(tmd.share_at_stroke_limit.min(), tmd.share_at_stroke_limit.max())} "
                   "of a group's ground motions there, and the PID's clearance is capped on the 3- and 5-storey ones",
          f"On the 1 s buildings the TMD's median stroke is at most {mid.median_stroke_m.max():.2f} m")
