@@ -241,7 +241,7 @@ def test_verdicts_count_helped_and_harmed_motions_and_bracket_the_median(study):
 
 def test_the_collected_runs_share_one_configuration_but_the_designs_keys_bare_runs_lack():
     def run(**ida):
-        params = {"ida": {"storey_height_m": 3.0, **ida}, "loads": {"e": 0.25}}
+        params = {"study": {"ida": {"storey_height_m": 3.0, **ida}, "loads": {"e": 0.25}}}  # job_log.job_config's
         return xr.Dataset(attrs={"config": json.dumps(params, sort_keys=True)})
 
     damped = run(storey_height_m=3.0, design_sa_g=0.4, stroke_limit_m=1.0)

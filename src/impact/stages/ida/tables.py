@@ -66,12 +66,14 @@ def run_config(bare: dict, dampers: dict) -> str | None:
 
 
 def _bare_view(config: str | None) -> str | None:
-    """A damper run's configuration as a bare run of the same study keeps it (outputs.files.describe's JSON)."""
-    if config is None:
-        return None
-    params = json.loads(config)
-    params["ida"] = {key: value for key, value in params["ida"].items() if key not in DESIGN_KEYS}
-    return json.dumps(params, sort_keys=True)
+    """A damper run's configuration as a bare run of the same study keeps it (outputs.files.describe's JSON): its
+    ida section, wherever the rule's params nest it, without the designs' keys."""
+    def without_designs(params):
+        if not isinstance(params, dict):
+            return params
+        return {key: ({k: v for k, v in value.items() if k not in DESIGN_KEYS} if key == "ida"
+                      else without_designs(value)) for key, value in params.items()}
+    return None if config is None else json.dumps(without_designs(json.loads(config)), sort_keys=True)
 
 
 def bootstrap_median(values: np.ndarray, clusters: np.ndarray, samples: int, seed: int,
