@@ -15,6 +15,9 @@ KINDS = ("bare", *DAMPER_KINDS)
 #: the section's keys only the dampers' designs read (their clearance's level, their stroke limit): a change of one
 #: reruns the damper runs, not the bare ones
 DESIGN_KEYS = ("design_sa_g", "stroke_limit_m")
+#: how near the stroke limit a certified peak stroke counts as reaching it, relative: far above a stop's contact
+#: tolerance, the peak's round-off (1e-12 of it) and a linear run's scaling (tested exact to 1e-12)
+AT_LIMIT = 1e-9
 
 
 def scales_linearly(building, dampers: tuple) -> bool:

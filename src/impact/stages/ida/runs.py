@@ -21,7 +21,7 @@ from impact.model.suites import load_suite_record
 from impact.outputs.files import as_integers, flag
 from impact.outputs.labels import EVENT_CAP_MEANINGS
 from impact.stages.buildings import impact_damper, make_building
-from impact.stages.ida.plan import MEASURES, SCALED, WHOLE, ladder, motions, scales_linearly
+from impact.stages.ida.plan import AT_LIMIT, MEASURES, SCALED, WHOLE, ladder, motions, scales_linearly
 
 INITIAL_CONDITION = "building and damper at rest; an impact damper's mass centred between its walls"
 STROKE_LIMIT_ATTRS = {"long_name": "largest stroke of a damper's mass from its rest place that the building houses: "
@@ -54,17 +54,12 @@ def over_ladder(run_at, levels: list[float], linear: bool) -> dict:
             for name in MEASURES}
 
 
-#: how far inside its stops a scaled stroke must stay for the run without stops to stand for the run with them:
-#: far above the certified peak's round-off (1e-12 of it) and the scaling's (tested exact to 1e-12)
-STOP_MARGIN = 1e-9
-
-
 def within_stops(free_at, stopped_at, levels: list[float], stroke_limit: float) -> dict:
     """A damper linear but for its end stops, over the ladder: its run without stops at 1 g, scaled, stands for each
-    level where that stroke stays inside the stops (they are never struck there, so the run with them is the same
-    motion); the other levels run with the stops."""
+    level where that stroke stays inside the stops by more than plan.AT_LIMIT (they are never struck there, so the
+    run with them is the same motion); the other levels run with the stops."""
     out = over_ladder(free_at, levels, linear=True)
-    struck = [i for i, stroke in enumerate(out["stroke"]) if stroke >= stroke_limit * (1.0 - STOP_MARGIN)]
+    struck = [i for i, stroke in enumerate(out["stroke"]) if stroke >= stroke_limit * (1.0 - AT_LIMIT)]
     if struck:
         runs = over_ladder(stopped_at, [levels[i] for i in struck], linear=False)
         for name in MEASURES:
@@ -78,10 +73,11 @@ def ladder_of(building: Building, dampers: tuple, run_with, levels: list[float])
     run_with(dampers, level) is one run's measures."""
     if scales_linearly(building, dampers):
         return over_ladder(lambda level: run_with(dampers, level), levels, linear=True)
-    free = tuple(replace(d, stroke_limit=None) for d in dampers)
-    if len(dampers) == 1 and dampers[0].stroke_limit is not None and scales_linearly(building, free):
-        return within_stops(lambda level: run_with(free, level), lambda level: run_with(dampers, level), levels,
-                            dampers[0].stroke_limit)
+    if len(dampers) == 1 and dampers[0].stroke_limit is not None:
+        free = (replace(dampers[0], stroke_limit=None),)
+        if scales_linearly(building, free):
+            return within_stops(lambda level: run_with(free, level), lambda level: run_with(dampers, level), levels,
+                                dampers[0].stroke_limit)
     return over_ladder(lambda level: run_with(dampers, level), levels, linear=False)
 
 

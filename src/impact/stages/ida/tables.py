@@ -12,12 +12,9 @@ from scipy import optimize, stats
 
 from impact.model.scene import DAMPER_KINDS
 from impact.model.suites import GROUPS, record_of
-from impact.stages.ida.plan import DESIGN_KEYS
+from impact.stages.ida.plan import AT_LIMIT, DESIGN_KEYS
 from impact.stages.resampling import cluster_draws
 
-#: how near the stroke limit a certified peak stroke counts as reaching it: a stop's or wall's contact tolerance and
-#: the peak's round-off are both far below (1e-12 of the stroke)
-STROKE_AT_LIMIT = 1e-9
 #: the bare building's measures kept beside the damped ones in the collected dataset
 BARE_KEPT = ("drift_ratio", "peak_roof", "peak_accel", "energy_residual")
 
@@ -92,7 +89,7 @@ def verdicts(ds: xr.Dataset, cfg: dict, level: float) -> pd.DataFrame:
     ratio = ds["drift_over_bare"].sel(level=level)
     groups = ds["group"].values
     records = np.array([record_of(m) for m in ds["motion"].values])
-    limit = math.inf if cfg["stroke_limit_m"] is None else cfg["stroke_limit_m"] * (1.0 - STROKE_AT_LIMIT)
+    limit = math.inf if cfg["stroke_limit_m"] is None else cfg["stroke_limit_m"] * (1.0 - AT_LIMIT)
     rows = []
     for b in ds["building"].values:
         for kind in ds["damper"].values:
