@@ -114,7 +114,7 @@ def collapse_hunt_cases(building_name: str = "s3_T1") -> list[dict]:
     peak = design_peak(ida_bare, ida["design_sa_g"])
     cases = []
     for kind in (CID, PID, TMD):
-        dampers = (designed_damper(loads, building, kind, 0.02, {0.02: 1.0}, peak),)
+        dampers = (designed_damper(loads, ida, building, kind, 0.02, {0.02: 1.0}, peak),)
         traced(cfg, building, dampers, ida_bare.isel(motion=[0]))  # compiles the kind's loop, outside the timing
         start = time.perf_counter()
         from_bare = traced(cfg, building, dampers, ida_bare, bare)

@@ -2,7 +2,7 @@
 
 numba compiles a namedtuple into a struct, and a compiled function takes a few
 bundles instead of dozens of positional arrays.  The steps the loop runs on every
-segment (scene_loop.search_events, monitor_modal, integrate_energy, move_to_end,
+segment (scene_loop.search_constraints, monitor_modal, integrate_energy, move_to_end,
 modal.integrate_modal, ...) are inlined, and there each array in a call's
 arguments costs a reference count, a namedtuple as many as it holds (bundling
 them in namedtuples cost 8 to 31 % of a run on benchmarks/bench_scene.py's
@@ -34,14 +34,14 @@ UnitArrays = namedtuple("UnitArrays", "kind floor mass load gap restitution")
 #: the units' spring stiffness and dashpot (zero for a CID unit); absent when every unit is a CID
 SpringArrays = namedtuple("SpringArrays", "stiffness damping")
 
-#: the storeys of a building that yields (absent for an elastic one): one row per storey of the yield table.
-#: Its law: elastic stiffness k, hardening ratio b, yield drift d_y, P-delta's geometric stiffness P/h and the
-#: drift |u| at which the run stops as a collapse.  Its state, which the run advances and leaves as its result:
-#: the branch (layout.BRANCH_ELASTIC, or +1 / -1 yielding), the perfectly plastic element's offset p, the escape
-#: flags of its drift and drift-velocity searches, its next event (time, kind, side), its plastic work and its
-#: yield events
+#: the storeys of a building that yields (absent for an elastic one), one entry per storey: the yield law of
+#: its rows in the constraint table (Events).  Its law: elastic stiffness k, hardening ratio b, yield drift d_y,
+#: P-delta's geometric stiffness P/h and the drift |u| at which the run stops as a collapse.  Its state, which
+#: the run advances and leaves as its result: the branch (layout.BRANCH_ELASTIC, or +1 / -1 yielding), the
+#: perfectly plastic element's offset p, the escape flags of its drift and drift-velocity searches, its plastic
+#: work and its yield events
 YieldArrays = namedtuple("YieldArrays", "stiffness hardening yield_drift geometric limit branch offset escape escape_v "
-                                        "ev_t ev_kind ev_side plastic yields")
+                                        "plastic yields")
 
 #: what the run certifies peaks of: rows over the degrees of freedom, kind (layout.MON_*),
 #: the record's coefficient (an absolute acceleration) and a cap the peak cannot pass
@@ -100,8 +100,12 @@ Rows = namedtuple("Rows", "cs ps cq pq cm pm cv pv cu pu")
 #: segment, and the weights of the half rows (modal.mode_weights)
 Vectors = namedtuple("Vectors", "stack found qs vs v_before reduced moduli s_before wt")
 
-#: the events found on a segment, per unit: time, wall side, kind; what an instant's impacts did; and its
-#: scratch flags (units resting on a wall they touched, floors whose impacts are done)
+#: the constraint table's events on a segment: per row, the next event's time, side and kind (layout.EV_*).
+#: A row is a difference of two degrees of freedom with a band it must stay in (or its velocity or its contact
+#: force, by the element's branch): every damper unit's row (the unit less its floor: its walls, its slide, its
+#: release), then every yielding storey's (its floor less the one below: its yield surface, its unloading, its
+#: collapse limit).  Beside them, per unit, what an instant's impacts did and its scratch flags (units resting on
+#: a wall they touched, floors whose impacts are done)
 Events = namedtuple("Events", "t side kind hit impulse touched floors_done")
 
 #: tables kept across segments: modal tables, a record step's tables, build_segment's scratch
@@ -139,7 +143,7 @@ class SegmentWork(structref.StructRefProxy):
     namedtuple counts one for every array it holds, which made bundling these steps cost 8 to 31 %.  The
     fields: the segment (kap C P ek pair single ramp kpow), the scratch rows (Rows), the vectors the steps use
     (the peak search's stack, an event search's output, reduced-size scratch cu1, |modal amplitudes| aw,
-    offsets before the segment, mode weights wt), each unit's next event (ev_t ev_side ev_kind),
+    offsets before the segment, mode weights wt), each constraint row's next event (ev_t ev_side ev_kind),
     build_segment's scratch, the modal tables, the configuration cache, the load vector, the run's state
     (RunState's arrays but check), and what the segment writes (diagnostics, the monitors' peaks,
     their times, the window's square, the round-off each peak is certified to).  Its arrays are borrowed views

@@ -1,9 +1,9 @@
 """The loop of a scene run, as a sequence of named steps.
 
 Each pass builds the segment of the current configuration, searches every
-unit's next event (certified), integrates the energy terms and the monitors
-exactly over the segment, moves the state to the segment's end and resolves
-the events found there (all units whose event falls at that instant).
+constraint's next event (certified), integrates the energy terms and the
+monitors exactly over the segment, moves the state to the segment's end and
+resolves the events found there (every row whose event falls at that instant).
 
 Arrays travel in the named bundles of :mod:`impact.engine.bundles`; the steps
 inlined on every segment take one structref of them, SegmentWork (see that
@@ -12,12 +12,13 @@ absent, and numba prunes them at compile time: `springs` (PID and TMD units),
 `fric` (Coulomb friction under CID units), `harm` (a harmonic load),
 `record` (a piecewise-linear load record) and `yld` (storeys that yield).
 
-The events are the rows of two tables: each damper unit's (its walls, its
-slide on the floor, its release from a wall) and each yielding storey's (its
-drift reaching the yield surface or the collapse limit, its drift velocity
-turning on a yielding branch).  Every row is searched on the same segment by
-the same certified search (events.first_exit); the earliest event of either
-table ends the segment, and every event at that instant is applied.
+The events are the rows of one table of constraints (bundles.Events): each
+damper unit's row (its walls, its slide on the floor, its release from a
+wall), then each yielding storey's (its drift reaching the yield surface or
+the collapse limit, its drift velocity turning on a yielding branch).  Every
+row is searched on the same segment by the same certified search
+(events.first_exit); the earliest event ends the segment, and every event at
+that instant is applied.
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ from impact.engine.bundles import (
     UnitArrays,
     Vectors,
     Workspace,
+    YieldArrays,
     borrowed,
 )
 from impact.engine.contact import (
@@ -192,17 +194,24 @@ def record_value(record, p, t):
 
 
 @njit(cache=True, inline='always')
-def _gap_row(C, P, nf, j, f, cs, ps):
-    """Unit j's gap row (its row minus its floor's) into cs, ps; returns the size of the floor row's terms at
-    tau = 0 (|re| + |im| for each mode, within sqrt 2 of its modulus), on which the gap row is rounded."""
-    floor_size = abs(P[f, 0])
+def _difference_row(C, P, a, b, cs, ps):
+    """Row a less row b into cs, ps (b < 0: the ground, nothing to take away): a unit's gap row (the unit less
+    its floor) or a storey's drift row (its floor less the one below).  Returns the size of row b's terms at
+    tau = 0 (|re| + |im| for each mode, within sqrt 2 of its modulus), on which the difference is rounded."""
+    if b < 0:
+        for k in range(C.shape[1]):
+            cs[k] = C[a, k]
+        for k in range(NPOLY):
+            ps[k] = P[a, k]
+        return 0.0
+    size = abs(P[b, 0])
     for k in range(C.shape[1]):
-        cf = C[f, k]
-        cs[k] = C[nf + j, k] - cf
-        floor_size += abs(cf.real) + abs(cf.imag)
+        cb = C[b, k]
+        cs[k] = C[a, k] - cb
+        size += abs(cb.real) + abs(cb.imag)
     for k in range(NPOLY):
-        ps[k] = P[nf + j, k] - P[f, k]
-    return floor_size
+        ps[k] = P[a, k] - P[b, k]
+    return size
 
 
 @njit(cache=True, inline='always')
@@ -210,7 +219,7 @@ def _contact_tol(gap, row_bound, floor_size):
     """A unit's contact tolerance: CONTACT_TOL of its gap row's terms and gap, but never below _ROUND_TOL of the
     unit's and its floor's own rows, since the gap row is their difference and is rounded on their size
     (a 1e-7 m gap on a floor moving 1e-2 m is resolved to 1e-18 m, not to round-off of 1e-7 m).  The unit's
-    row is at most the floor's plus the gap row's, so the floor's size (from _gap_row) is all it needs."""
+    row is at most the floor's plus the gap row's, so the floor's size (from _difference_row) is all it needs."""
     return max(CONTACT_TOL * (row_bound + gap), _ROUND_TOL * (2.0 * floor_size + row_bound))
 
 
@@ -277,204 +286,183 @@ def _clear_of_walls(kpow, ek, c, p, lo, hi, big_t, delta):
             and hi - h1 >= delta and h1 - lo >= delta)
 
 
-SIDE_FOUND, SIDE_KEPT = 2, 3  # _earliest: the wall from the search, or the unit's entry untouched
+SIDE_FOUND, SIDE_KEPT = 2, 3  # _earliest: the end of the band the search crossed, or the row's entry untouched
 
 
 @njit(cache=True, inline='always')
-def _earliest(out, best, ties, j, kind, side, ev_t, ev_side, ev_kind):
-    """Unit j's event found by a search (out) becomes its event if it comes first (or ties, with ties);
-    returns the earliest time so far.  side: the event's wall (SIDE_FOUND: the one the search crossed,
-    SIDE_KEPT: the unit's entry left as it is)."""
+def _earliest(out, best, ties, r, kind, side, ev_t, ev_side, ev_kind):
+    """Row r's event found by a search (out) becomes its event if it comes first (or ties, with ties); returns the
+    earliest time so far.  side: the event's side (SIDE_FOUND: the end of the band the search crossed, SIDE_KEPT:
+    the row's entry left as it is, else this side)."""
     if out[0] < best or (ties and out[0] == best):
-        ev_t[j] = out[0]
+        ev_t[r] = out[0]
         if side == SIDE_FOUND:
-            ev_side[j] = int(out[1])
+            ev_side[r] = int(out[1])
         elif side != SIDE_KEPT:
-            ev_side[j] = side
-        ev_kind[j] = kind
+            ev_side[r] = side
+        ev_kind[r] = kind
         return out[0]
     return best
 
 
 @njit(cache=True, inline='always')
-def search_events(w, nf, units, springs, fric, tau_max, r0, r1, ek_tau):
-    """Next event of every unit; returns the earliest time (inf if none up to tau_max).
+def _band_exit(w, lo, hi, size, escape, horizon, ek_tau):
+    """The certified first exit before `horizon` of the halved row in w.cs, w.ps from the band (lo, hi), into
+    w.found; `size` is what the row was rounded on (_difference_row).  When ek_tau is the horizon, a row clear of
+    both ends over the whole segment is settled without a search (_clear_of_walls)."""
+    kpow, cs, ps, out = w.kpow, w.cs, w.ps, w.found
+    delta = _contact_tol(hi - lo, bound_tab(kpow, cs, ps, 0, 0.0), size)
+    if escape == 0 and horizon == ek_tau and _clear_of_walls(kpow, w.ek, cs, ps, lo, hi, horizon, delta):
+        out[0] = np.inf
+        out[1] = 0.0
+        out[2] = 0.0
+        out[3] = 1.0
+    else:
+        first_exit(w.kap, kpow, cs, ps, lo, hi, horizon, escape, delta, out)
 
-    ek = exp(kap ek_tau): when ek_tau is tau_max, a unit far from its walls is cleared without a search.
+
+@njit(cache=True, inline='always')
+def _sign_exit(w, sign, escape_v, horizon, ek_tau, may_clear):
+    """Where the halved row in w.cs, w.ps stops moving in the direction `sign` (sign row' >= 0 while it keeps
+    on): the certified first exit of sign row' from [0, inf) before `horizon`, into w.found (the velocity row
+    left in w.cq, w.pq).  With may_clear, settled without a search where it is clear (as _band_exit)."""
+    kap, kpow, cq, pq, out = w.kap, w.kpow, w.cq, w.pq, w.found
+    derivative_row(kap, w.cs, w.ps, cq, pq)
+    for k in range(kap.shape[0]):
+        cq[k] = sign * cq[k]
+    for k in range(NPOLY):
+        pq[k] = sign * pq[k]
+    dv = CONTACT_TOL * bound_tab(kpow, cq, pq, 0, 0.0)
+    if may_clear and escape_v == 0 and horizon == ek_tau and _clear_of_walls(kpow, w.ek, cq, pq, 0.0, np.inf,
+                                                                             horizon, dv):
+        out[0] = np.inf
+        out[2] = 0.0
+        out[3] = 1.0
+    else:
+        first_exit(kap, kpow, cq, pq, 0.0, np.inf, horizon, escape_v, dv, out)
+
+
+@njit(cache=True, inline='always')
+def _book_search(diag, out):
+    diag[D_GRAZE] += out[2]
+    diag[D_STEPS] += out[3]
+
+
+@njit(cache=True, inline='always')
+def search_constraints(w, nf, units, springs, fric, yld, tau_max, r0, r1, ek_tau):
+    """The next event of every row of the constraint table (bundles.Events: the damper units' rows first, a
+    yielding building's storeys' after them), each row searched up to the earliest event found so far; returns
+    the earliest (inf if none up to tau_max).
+
+    ek = exp(kap ek_tau): when ek_tau is the horizon, a row far from its band's ends is cleared without a search.
     The searched rows are weighted half rows (modal.halve): half the exponentials per evaluation.
     """
-    kap, C, P, kpow, ek, wt, diag = w.kap, w.C, w.P, w.kpow, w.ek, w.wt, w.diag
+    ev_t = w.ev_t
+    nu = units.mass.shape[0]
+    best = tau_max
+    for j in range(nu):
+        best = _search_unit(w, nf, j, units, springs, fric, r0, r1, best, ek_tau)
+    if yld is not None:
+        law = borrowed_storeys(yld)  # bound to each storey's step: borrowed, its arrays count no references
+        for i in range(law.branch.shape[0]):
+            best = _search_storey(w, law, i, nu + i, best, ek_tau)
+    found = np.inf
+    for r in range(ev_t.shape[0]):
+        if ev_t[r] < found:
+            found = ev_t[r]
+    return found
+
+
+@njit(cache=True, inline='always')
+def _search_unit(w, nf, j, units, springs, fric, r0, r1, best, ek_tau):
+    """Unit j's row in its contact mode: a free unit's gap within its walls (and a sliding unit's slide keeping
+    its direction), a unit held on a wall by a contact force that pushes, a unit friction holds on its floor by a
+    force friction can give.  Returns the earliest event time so far."""
+    kap, C, P, kpow, wt, diag = w.kap, w.C, w.P, w.kpow, w.wt, w.diag
     mode, side, sigma, escape, escape_v = w.mode, w.side, w.sigma, w.escape, w.escape_v
     ev_t, ev_side, ev_kind, cs, ps, cq, pq, out = w.ev_t, w.ev_side, w.ev_kind, w.cs, w.ps, w.cq, w.pq, w.found
-    ukind, ufloor, um, uload, ud = units.kind, units.floor, units.mass, units.load, units.gap
-    best = tau_max
-    for j in range(um.shape[0]):
-        ev_t[j] = np.inf
-        ev_kind[j] = EV_NONE
-        if not ukind[j] & UNIT_WALLS or mode[j] == MODE_LOCKED:
-            continue
-        f = ufloor[j]
-        half = 0.5 * ud[j]
-        if j > 0 and _same_unit_state(j, nf, units, springs, w):
-            # identical to the unit before (a multi-unit damper moving as one): the same event, bit for bit
-            ev_t[j] = ev_t[j - 1]
-            ev_side[j] = ev_side[j - 1]
-            ev_kind[j] = ev_kind[j - 1]
-            continue
-        out[2] = 0.0
-        out[3] = 0.0
-        if mode[j] == MODE_FREE:
-            floor_size = _gap_row(C, P, nf, j, f, cs, ps)
-            halve_from_start(kap, cs, ps, wt)
-            delta = _contact_tol(ud[j], bound_tab(kpow, cs, ps, 0, 0.0), floor_size)
-            if escape[j] == 0 and best == ek_tau and _clear_of_walls(kpow, ek, cs, ps, -half, half, best, delta):
-                out[0] = np.inf
-                out[1] = 0.0
-                out[3] = 1.0
-            else:
-                first_exit(kap, kpow, cs, ps, -half, half, best, escape[j], delta, out)
-            diag[D_GRAZE] += out[2]
-            diag[D_STEPS] += out[3]
-            best = _earliest(out, best, True, j, EV_WALL, SIDE_FOUND, ev_t, ev_side, ev_kind)
-            if fric is not None:
-                if fric[j] > 0.0:
-                    # sigma s' > 0 while sliding; the slide ends where it reaches 0
-                    derivative_row(kap, cs, ps, cq, pq)
-                    for k in range(kap.shape[0]):
-                        cq[k] = sigma[j] * cq[k]
-                    for k in range(NPOLY):
-                        pq[k] = sigma[j] * pq[k]
-                    dv = CONTACT_TOL * bound_tab(kpow, cq, pq, 0, 0.0)
-                    first_exit(kap, kpow, cq, pq, 0.0, np.inf, best, escape_v[j], dv, out)
-                    diag[D_STEPS] += out[3]
-                    best = _earliest(out, best, False, j, EV_SLIDE_STOP, 0, ev_t, ev_side, ev_kind)
-        elif mode[j] == MODE_STUCK:
-            stuck_row(kap, C, P, f, side[j], uload[j] * r0, uload[j] * r1,
-                      _unit_level(j, units, springs, fric), cq, pq)
-            halve_from_start(kap, cq, pq, wt)
-            delta = CONTACT_TOL * bound_tab(kpow, cq, pq, 0, 0.0)
-            q0 = deriv_at0(kap, cq, pq, 0)
-            esc = 1 if -q0 < delta else 0
-            first_exit(kap, kpow, cq, pq, -np.inf, 0.0, best, esc, delta, out)
-            diag[D_GRAZE] += out[2]
-            diag[D_STEPS] += out[3]
-            best = _earliest(out, best, True, j, EV_RELEASE, SIDE_KEPT, ev_t, ev_side, ev_kind)
-        elif mode[j] == MODE_FLOOR:
-            if fric is not None:
-                a_f = fric[j]
-                floor_row(kap, C, P, f, uload[j] * r0, uload[j] * r1, cq, pq)
-                halve_from_start(kap, cq, pq, wt)
-                delta = CONTACT_TOL * (bound_tab(kpow, cq, pq, 0, 0.0) + a_f)
-                q0 = deriv_at0(kap, cq, pq, 0)
-                esc = 0
-                if a_f - abs(q0) < delta:
-                    esc = 1 if q0 > 0.0 else -1
-                first_exit(kap, kpow, cq, pq, -a_f, a_f, best, esc, delta, out)
-                diag[D_STEPS] += out[3]
-                best = _earliest(out, best, True, j, EV_FLOOR_EXIT, SIDE_FOUND, ev_t, ev_side, ev_kind)
-    found = np.inf
-    for j in range(um.shape[0]):
-        if ev_t[j] < found:
-            found = ev_t[j]
-    return found
-
-
-@njit(cache=True, inline='always')
-def _drift_row(C, P, i, cs, ps):
-    """Storey i's drift row (its floor's row less the one below, or the floor's own for the first storey) into cs,
-    ps; returns the size of the lower floor's terms at tau = 0, on which the difference is rounded (as _gap_row)."""
-    size = 0.0
-    for k in range(C.shape[1]):
-        cs[k] = C[i, k]
-    for k in range(NPOLY):
-        ps[k] = P[i, k]
-    if i > 0:
-        size = abs(P[i - 1, 0])
-        for k in range(C.shape[1]):
-            cb = C[i - 1, k]
-            cs[k] -= cb
-            size += abs(cb.real) + abs(cb.imag)
-        for k in range(NPOLY):
-            ps[k] -= P[i - 1, k]
-    return size
-
-
-@njit(cache=True, inline='always')
-def _storey_event(out, horizon, i, kind, side, ev_t, ev_kind, ev_side):
-    """Storey i's event found by a search (out) becomes its event if it comes first; returns the earliest time."""
-    if out[0] <= horizon and out[0] <= ev_t[i]:
-        ev_t[i] = out[0]
-        ev_kind[i] = kind
-        ev_side[i] = side
-        return out[0]
-    return horizon
-
-
-@njit(cache=True, inline='always')
-def search_storeys(w, yld, horizon, ek_tau):
-    """Next event of every storey of a yielding building, certified as a unit's; returns the earliest (inf if none
-    up to horizon, the earliest unit event or the segment's end).  ek = exp(kap ek_tau): when ek_tau is the
-    horizon, a storey far from its events is cleared without a search (_clear_of_walls), as a unit is.
-
-    An elastic storey's drift u stays within d_y of its plastic offset p (and within the collapse limit); a yielding
-    one's drift velocity keeps the branch's sign s (s u' >= 0) and its drift stays within the collapse limit.
-    """
-    kap, C, P, kpow, ek, wt, diag = w.kap, w.C, w.P, w.kpow, w.ek, w.wt, w.diag
-    cs, ps, cq, pq, out = w.cs, w.ps, w.cq, w.pq, w.found
-    # the table's arrays read once: each read of a bundle's field in the loop costs a reference count
-    branch, dy, limit, offset = yld.branch, yld.yield_drift, yld.limit, yld.offset
-    escape, escape_v, ev_t, ev_kind, ev_side = yld.escape, yld.escape_v, yld.ev_t, yld.ev_kind, yld.ev_side
-    found = np.inf
-    for i in range(branch.shape[0]):
-        ev_t[i] = np.inf
-        ev_kind[i] = EV_NONE
-        size = _drift_row(C, P, i, cs, ps)
+    ev_t[j] = np.inf
+    ev_kind[j] = EV_NONE
+    if not units.kind[j] & UNIT_WALLS or mode[j] == MODE_LOCKED:
+        return best
+    if j > 0 and _same_unit_state(j, nf, units, springs, w):
+        # identical to the unit before (a multi-unit damper moving as one): the same event, bit for bit
+        ev_t[j] = ev_t[j - 1]
+        ev_side[j] = ev_side[j - 1]
+        ev_kind[j] = ev_kind[j - 1]
+        return best
+    f = units.floor[j]
+    if mode[j] == MODE_FREE:
+        half = 0.5 * units.gap[j]
+        size = _difference_row(C, P, nf + j, f, cs, ps)
         halve_from_start(kap, cs, ps, wt)
-        lim = limit[i]
-        out[2] = 0.0
-        out[3] = 0.0
-        if branch[i] == BRANCH_ELASTIC:
-            lo = max(offset[i] - dy[i], -lim)
-            hi = min(offset[i] + dy[i], lim)
-            if hi - lo < np.inf:
-                delta = _contact_tol(hi - lo, bound_tab(kpow, cs, ps, 0, 0.0), size)
-                if escape[i] == 0 and horizon == ek_tau and _clear_of_walls(kpow, ek, cs, ps, lo, hi, horizon, delta):
-                    out[0] = np.inf
-                    out[1] = 0.0
-                    out[3] = 1.0
-                else:
-                    first_exit(kap, kpow, cs, ps, lo, hi, horizon, escape[i], delta, out)
-                side = 1 if out[1] > 0.0 else -1
-                at_limit = hi == lim if side > 0 else lo == -lim
-                horizon = _storey_event(out, horizon, i, EV_COLLAPSE if at_limit else EV_YIELD, side, ev_t, ev_kind,
-                                        ev_side)
-        else:
-            sign = branch[i]
-            derivative_row(kap, cs, ps, cq, pq)
-            for k in range(kap.shape[0]):
-                cq[k] = sign * cq[k]
-            for k in range(NPOLY):
-                pq[k] = sign * pq[k]
-            dv = CONTACT_TOL * bound_tab(kpow, cq, pq, 0, 0.0)
-            if escape_v[i] == 0 and horizon == ek_tau and _clear_of_walls(kpow, ek, cq, pq, 0.0, np.inf, horizon, dv):
-                out[0] = np.inf
-                out[3] = 1.0
-            else:
-                first_exit(kap, kpow, cq, pq, 0.0, np.inf, horizon, escape_v[i], dv, out)
-            horizon = _storey_event(out, horizon, i, EV_UNLOAD, sign, ev_t, ev_kind, ev_side)
-            if lim < np.inf:
+        _band_exit(w, -half, half, size, escape[j], best, ek_tau)
+        _book_search(diag, out)
+        best = _earliest(out, best, True, j, EV_WALL, SIDE_FOUND, ev_t, ev_side, ev_kind)
+        if fric is not None:
+            if fric[j] > 0.0:
+                # sigma s' > 0 while sliding; the slide ends where it reaches 0
+                _sign_exit(w, sigma[j], escape_v[j], best, ek_tau, False)
                 diag[D_STEPS] += out[3]
-                diag[D_GRAZE] += out[2]
-                out[2] = 0.0
-                out[3] = 0.0
-                delta = _contact_tol(2.0 * lim, bound_tab(kpow, cs, ps, 0, 0.0), size)
-                first_exit(kap, kpow, cs, ps, -lim, lim, horizon, 0, delta, out)
-                horizon = _storey_event(out, horizon, i, EV_COLLAPSE, 1 if out[1] > 0.0 else -1, ev_t, ev_kind,
-                                        ev_side)
-        diag[D_GRAZE] += out[2]
-        diag[D_STEPS] += out[3]
-        found = min(found, ev_t[i])
-    return found
+                best = _earliest(out, best, False, j, EV_SLIDE_STOP, 0, ev_t, ev_side, ev_kind)
+    elif mode[j] == MODE_STUCK:
+        stuck_row(kap, C, P, f, side[j], units.load[j] * r0, units.load[j] * r1,
+                  _unit_level(j, units, springs, fric), cq, pq)
+        halve_from_start(kap, cq, pq, wt)
+        delta = CONTACT_TOL * bound_tab(kpow, cq, pq, 0, 0.0)
+        q0 = deriv_at0(kap, cq, pq, 0)
+        esc = 1 if -q0 < delta else 0
+        first_exit(kap, kpow, cq, pq, -np.inf, 0.0, best, esc, delta, out)
+        _book_search(diag, out)
+        best = _earliest(out, best, True, j, EV_RELEASE, SIDE_KEPT, ev_t, ev_side, ev_kind)
+    elif mode[j] == MODE_FLOOR:
+        if fric is not None:
+            a_f = fric[j]
+            floor_row(kap, C, P, f, units.load[j] * r0, units.load[j] * r1, cq, pq)
+            halve_from_start(kap, cq, pq, wt)
+            delta = CONTACT_TOL * (bound_tab(kpow, cq, pq, 0, 0.0) + a_f)
+            q0 = deriv_at0(kap, cq, pq, 0)
+            esc = 0
+            if a_f - abs(q0) < delta:
+                esc = 1 if q0 > 0.0 else -1
+            first_exit(kap, kpow, cq, pq, -a_f, a_f, best, esc, delta, out)
+            diag[D_STEPS] += out[3]
+            best = _earliest(out, best, True, j, EV_FLOOR_EXIT, SIDE_FOUND, ev_t, ev_side, ev_kind)
+    return best
+
+
+@njit(cache=True, inline='always')
+def _search_storey(w, yld, i, r, best, ek_tau):
+    """Storey i's row (row r of the table) on its branch: an elastic storey's drift u stays within d_y of its
+    plastic offset p (and within the collapse limit); a yielding one's drift velocity keeps the branch's sign s
+    (s u' >= 0) and its drift stays within the collapse limit.  Returns the earliest event time so far."""
+    kap, C, P, wt, out = w.kap, w.C, w.P, w.wt, w.found
+    ev_t, ev_kind, ev_side = w.ev_t, w.ev_kind, w.ev_side
+    ev_t[r] = np.inf
+    ev_kind[r] = EV_NONE
+    size = _difference_row(C, P, i, i - 1, w.cs, w.ps)
+    halve_from_start(kap, w.cs, w.ps, wt)
+    lim = yld.limit[i]
+    if yld.branch[i] == BRANCH_ELASTIC:
+        lo = max(yld.offset[i] - yld.yield_drift[i], -lim)
+        hi = min(yld.offset[i] + yld.yield_drift[i], lim)
+        if hi - lo < np.inf:
+            _band_exit(w, lo, hi, size, yld.escape[i], best, ek_tau)
+            _book_search(w.diag, out)
+            side = 1 if out[1] > 0.0 else -1
+            at_limit = hi == lim if side > 0 else lo == -lim
+            best = _earliest(out, best, True, r, EV_COLLAPSE if at_limit else EV_YIELD, side, ev_t, ev_side,
+                             ev_kind)
+        return best
+    sign = yld.branch[i]
+    _sign_exit(w, sign, yld.escape_v[i], best, ek_tau, True)
+    _book_search(w.diag, out)
+    best = _earliest(out, best, True, r, EV_UNLOAD, sign, ev_t, ev_side, ev_kind)
+    if lim < np.inf:
+        _band_exit(w, -lim, lim, size, 0, best, -1.0)
+        _book_search(w.diag, out)
+        best = _earliest(out, best, True, r, EV_COLLAPSE, 1 if out[1] > 0.0 else -1, ev_t, ev_side, ev_kind)
+    return best
 
 
 @njit(cache=True, inline='always')
@@ -484,20 +472,15 @@ def at_instant(tau_ev):
 
 
 @njit(cache=True)
-def name_stop(tau_ev, ev_t, ev_kind, ev_side, yld, diag):
-    """Which element's event a run stopped at (layout.D_STOP_*): the first unit with an event at the instant
-    tau_ev, else the first storey (its kind of event tells a storey's index from a unit's)."""
+def name_stop(tau_ev, events, nu, diag):
+    """Which element's event a run stopped at (layout.D_STOP_*): the first row of the constraint table with an
+    event at the instant tau_ev; its element is a unit or, past the units' rows, a storey (its kind of event
+    tells which)."""
     limit = at_instant(tau_ev)
-    nu = ev_t.shape[0]
-    for j in range(nu):
-        if ev_t[j] <= limit:
-            _stop_at(j, ev_kind[j], ev_side[j], diag)
+    for r in range(events.t.shape[0]):
+        if events.t[r] <= limit:
+            _stop_at(r if r < nu else r - nu, events.kind[r], events.side[r], diag)
             return
-    if yld is not None:
-        for i in range(yld.ev_t.shape[0]):
-            if yld.ev_t[i] <= limit:
-                _stop_at(i, yld.ev_kind[i], yld.ev_side[i], diag)
-                return
 
 
 @njit(cache=True, inline='always')
@@ -508,17 +491,18 @@ def _stop_at(element, kind, side, diag):
 
 
 @njit(cache=True)
-def resolve_storeys(tau_ev, yld, q, v, diag):
-    """Apply every storey's event at this instant (tau_ev into the segment): a storey reaching its yield surface
-    moving outward yields (its offset set so that u - p is exactly s d_y); a yielding storey whose drift turns
-    unloads elastically from the surface; a drift at the collapse limit ends the run (diag[D_COLLAPSE])."""
+def resolve_storeys(tau_ev, yld, events, nu, q, v, diag):
+    """Apply every storey's event at this instant (tau_ev into the segment; storey i's is row nu + i of the
+    constraint table): a storey reaching its yield surface moving outward yields (its offset set so that u - p is
+    exactly s d_y); a yielding storey whose drift turns unloads elastically from the surface; a drift at the
+    collapse limit ends the run (diag[D_COLLAPSE])."""
     branch, dy, offset, escape = yld.branch, yld.yield_drift, yld.offset, yld.escape
     limit = at_instant(tau_ev)
     for i in range(branch.shape[0]):
-        if not yld.ev_t[i] <= limit:
+        if not events.t[nu + i] <= limit:
             continue
-        kind = yld.ev_kind[i]
-        side = yld.ev_side[i]
+        kind = events.kind[nu + i]
+        side = events.side[nu + i]
         u = storey_drift(q, i)
         if kind == EV_COLLAPSE:
             diag[D_COLLAPSE] = 1.0
@@ -936,7 +920,7 @@ def settle(t, model, springs, fric, harm, record, yld, st, scratch):
             f = ufloor[j]
             if check[j] == 1 and mode[j] == MODE_FREE:
                 check[j] = 0
-                floor_size = _gap_row(C, P, nf, j, f, cs, ps)
+                floor_size = _difference_row(C, P, nf + j, f, cs, ps)
                 push = side[j] * deriv_at0(kap, cs, ps, 2)
                 rebound = v[nf + j] - v[f]
                 tol = _contact_tol(ud[j], bound(kap, cs, ps, 0, 0.0), floor_size)
@@ -1142,8 +1126,8 @@ def _follow_floor_jolts(nf, units, fric, st, jolted):
 
 
 @njit(cache=True)
-def _workspace(nt, nfull, nu, nmax, slots, nmon):
-    """Every array a run works in, allocated once."""
+def _workspace(nt, nfull, nu, nrows, nmax, slots, nmon):
+    """Every array a run works in, allocated once; nrows: the constraint table's rows (bundles.Events)."""
     seg = Segment(np.zeros(nt, dtype=np.complex128), np.zeros((nfull, nt), dtype=np.complex128),
                   np.zeros((nfull, NPOLY)), np.zeros(nt, dtype=np.complex128), np.zeros((nt, nt), dtype=np.complex128),
                   np.zeros((nt, SINGLE_COLUMNS), dtype=np.complex128), np.zeros((nt, nt), dtype=np.complex128),
@@ -1153,7 +1137,7 @@ def _workspace(nt, nfull, nu, nmax, slots, nmon):
                 np.zeros((nfull, NPOLY)), np.zeros((2, nt), dtype=np.complex128), np.zeros((2, NPOLY)))
     vecs = Vectors(np.zeros((256, 4)), np.zeros(4), np.zeros(nfull), np.zeros(nfull), np.zeros(nfull), np.zeros(nmax),
                    np.zeros(2 * nmax), np.zeros(nu), np.ones(nt))
-    events = Events(np.zeros(nu), np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64),
+    events = Events(np.zeros(nrows), np.zeros(nrows, dtype=np.int64), np.zeros(nrows, dtype=np.int64),
                     np.zeros(nu, dtype=np.bool_), np.zeros(nu), np.zeros(nu, dtype=np.bool_),
                     np.zeros(nfull, dtype=np.bool_))
     step = StepTables(np.full(slots, -1, dtype=np.int64), np.zeros((slots, nt), dtype=np.complex128),
@@ -1264,7 +1248,7 @@ def handle_events(t, tau, model, springs, fric, harm, record, yld, st, scratch):
         v_before[i] = v[i]
     n_hit = resolve_events(tau, model.building, model.units, fric, st, scratch.events, p[P_VSTICK], diag)
     if yld is not None:
-        resolve_storeys(tau, yld, st.q, st.v, diag)
+        resolve_storeys(tau, yld, scratch.events, model.units.mass.shape[0], st.q, st.v, diag)
         storey_jumps(yld, st.q, st.v, diag, n_hit > 0)  # an impact, or a resting unit's merge, moved a floor
     if n_hit > 0:
         diag[D_IMPACTS] += n_hit
@@ -1309,6 +1293,14 @@ def borrowed_model(model):
                        UnitArrays(b(units.kind), b(units.floor), b(units.mass), b(units.load), b(units.gap),
                                   b(units.restitution)), b(load_vec),
                        MonitorArrays(b(monitors.rows), b(monitors.kind), b(monitors.record_coef), b(monitors.cap)))
+
+
+@njit(cache=True, inline='always')
+def borrowed_storeys(yld):
+    """A yielding building's storey table (bundles.YieldArrays), every array borrowed (bundles.borrowed)."""
+    b = borrowed
+    return YieldArrays(b(yld.stiffness), b(yld.hardening), b(yld.yield_drift), b(yld.geometric), b(yld.limit),
+                       b(yld.branch), b(yld.offset), b(yld.escape), b(yld.escape_v), b(yld.plastic), b(yld.yields))
 
 
 @njit(cache=True)
@@ -1364,7 +1356,8 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
     nf = building.mass.shape[0]
     nu = units.mass.shape[0]
     nt = cache.lam.shape[1] + (2 if harm is not None else 0)
-    ws = _workspace(nt, nf + nu, nu, cache.kinv.shape[1], cache.key.shape[0], monitors.rows.shape[0])
+    nrows = nu + (yld.branch.shape[0] if yld is not None else 0)
+    ws = _workspace(nt, nf + nu, nu, nrows, cache.kinv.shape[1], cache.key.shape[0], monitors.rows.shape[0])
     st = RunState(start.mode.copy(), start.side.copy(), np.zeros(nu, dtype=np.int64), np.zeros(nu),
                   np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64),
                   start.q.copy(), start.v.copy())
@@ -1372,7 +1365,6 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
     w = _segment_work(ws, st, out, cache, load_vec)
     kap, C, P, ek, pair, single, ramp, kpow = ws.seg
     _, _, qs, vs, _, _, aw, _, wt = ws.vecs
-    ev_t, ev_side, ev_kind = ws.events.t, ws.events.side, ws.events.kind
     mtab, dtab, work, cursor = ws.tables
     mode, escape, escape_v = st.mode, st.escape, st.escape_v
     q, v = st.q, st.v
@@ -1424,9 +1416,8 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
             tab_key = key
             tab_tau = tau_max
         diag[D_SEGMENTS] += 1.0
-        best = search_events(w, nf, units, springs, fric, tau_max, r0, r1, tab_tau if key == tab_key else -1.0)
-        if yld is not None:
-            best = min(best, search_storeys(w, yld, min(best, tau_max), tab_tau if key == tab_key else -1.0))
+        best = search_constraints(w, nf, units, springs, fric, yld, tau_max, r0, r1,
+                                  tab_tau if key == tab_key else -1.0)
         event = best <= tau_max and best < np.inf
         tau = best if event else tau_max
         n = cache.size[s]
@@ -1465,7 +1456,7 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
         stop = event_cap_reached(t, p, clock)
         if stop != 0:
             diag[D_CAP] = stop
-            name_stop(tau, ev_t, ev_kind, ev_side, yld, diag)
+            name_stop(tau, ws.events, nu, diag)
             break
         handle_events(t, tau, model, springs, fric, harm, record, yld, st_b, instant)
         if diag[D_COLLAPSE] != 0.0:

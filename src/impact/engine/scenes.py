@@ -303,7 +303,7 @@ def _yield_arrays(scene: Scene) -> YieldArrays | None:
         limit = scene.collapse_drift_ratio * b.storey_height
     zi, zf = np.zeros(nf, dtype=np.int64), np.zeros(nf)
     return YieldArrays(b.storey_stiffness.copy(), np.full(nf, b.hardening), dy.copy(), geometric, limit, zi.copy(),
-                       zf.copy(), zi.copy(), zi.copy(), zf.copy(), zi.copy(), zi.copy(), zf.copy(), zi.copy())
+                       zf.copy(), zi.copy(), zi.copy(), zf.copy(), zi.copy())
 
 
 def _scene_arrays(scene: Scene, peaks=PEAK_GROUPS, window: bool = True):
