@@ -40,7 +40,8 @@ def test_every_compiled_function_takes_at_most_ten_parameters():
 def test_the_per_segment_steps_are_inlined_and_take_the_segment_work():
     """The steps run on every segment stay inlined (a compiled call would copy its arguments in each time) and
     reach their arrays through the one SegmentWork, whose fields are the names they read."""
-    steps = {"build_segment", "search_constraints", "_search_unit", "_search_storey", "_band_exit", "_sign_exit",
+    steps = {"build_segment", "search_constraints", "_search_unit", "_search_storey", "_search_yielding_storey",
+             "_storey_clear", "_turning_clear", "_modal_reach", "_storey_row", "_band_exit", "_sign_exit",
              "integrate_segment", "integrate_energy", "integrate_modal",
              "monitor_modal", "monitor_row", "curvature_bound", "window_square", "move_to_end"}
     found = {name: inline for _, name, _, inline in compiled_functions(ENGINE)}

@@ -80,8 +80,8 @@ RunState = namedtuple("RunState", "mode side sigma offset escape escape_v check 
 ConfigCache = namedtuple("ConfigCache", "key size lam vec vinv kinv damping dof load forced mass")
 
 #: per-slot modal tables (modal.modal_slot): key, viscous quadratic form, the load's work per mode,
-#: each monitor's modal coefficients and curvature bound
-ModalTables = namedtuple("ModalTables", "key gvis lmod mvec mbnd")
+#: each monitor's modal coefficients and curvature bound, and each yielding storey's reach (modal.storey_reach)
+ModalTables = namedtuple("ModalTables", "key gvis lmod mvec mbnd reach")
 
 #: a record's whole sample step per slot (scene_loop.step_tables): key, exp(kap dt), integral tables (the ramp
 #: form's too: segment.ramp_tables)
@@ -127,7 +127,7 @@ InstantScratch = namedtuple("InstantScratch", "seg_work cursor events v_before r
 #: structref counts a reference for every array it holds and its fields again: reading w.cache.lam counts twelve
 #: where w.lam counts one.  The steps on every segment read these; w.cache stays whole for has_rigid_mode and
 #: settle, which take the bundle
-FLAT_FIELDS = "size lam vec vinv kinv damping dof load forced mass gvis lmod mvec mbnd wf wc"
+FLAT_FIELDS = "size lam vec vinv kinv damping dof load forced mass gvis lmod mvec mbnd reach wf wc"
 
 
 @structref.register

@@ -37,12 +37,14 @@ from impact.engine.segment import poly_at, poly_bound, poly_integral
 
 
 @njit(cache=True)
-def modal_tables(slots, nmax, nmon):
-    """Empty per-slot tables for modal_slot (nmax: the largest reduced size; mkey -1: not filled)."""
+def modal_tables(slots, nmax, nmon, nstoreys):
+    """Empty per-slot tables for modal_slot (nmax: the largest reduced size; mkey -1: not filled; nstoreys: the
+    yielding storeys, 0 for an elastic building)."""
     m2 = 2 * nmax
     return ModalTables(np.full(slots, -1, dtype=np.int64), np.zeros((slots, m2, m2), dtype=np.complex128),
                        np.zeros((slots, m2), dtype=np.complex128),
-                       np.zeros((slots, nmon, m2), dtype=np.complex128), np.zeros((slots, nmon, m2)))
+                       np.zeros((slots, nmon, m2), dtype=np.complex128), np.zeros((slots, nmon, m2)),
+                       np.zeros((slots, nstoreys, 2, m2)))
 
 
 _PAIR_TOL = 1e-9  # two modes are a conjugate pair when they are conjugates to this fraction of |kap|
@@ -130,7 +132,7 @@ def modal_slot(s, key, cache, nf, units, mode, mon_rows, mon_kind, mtab, growth)
 
     growth: the most a growing mode's exponential (Re kap > 0: a storey whose P-delta outweighs its stiffness)
     can reach over a segment, which the run keeps short enough (scene_loop.growth_rate); 1 when none grows."""
-    mkey, gvis, lmod, mvec, mbnd = mtab
+    mkey, gvis, lmod, mvec, mbnd, reach = mtab
     if mkey[s] == key:
         return
     nr, lam, vec, cred, fidx, ellr = cache.size, cache.lam, cache.vec, cache.damping, cache.dof, cache.load
@@ -167,7 +169,21 @@ def modal_slot(s, key, cache, nf, units, mode, mon_rows, mon_kind, mtab, growth)
             mbnd[s, m, k] = abs(acc) * abs(lam[s, k]) ** 2
             if lam[s, k].real > 0.0:
                 mbnd[s, m, k] *= growth
+    storey_reach(s, n, vec, reach)
     mkey[s] = key
+
+
+@njit(cache=True, inline='always')
+def storey_reach(s, n, vec, reach):
+    """Per yielding storey i and mode k of slot s: the modulus of the storey's drift in the mode (its floor's
+    position less the one below's), and the size of the two floors' own parts (|re| + |im| each), on which a
+    drift row is rounded (scene_loop._storey_clear).  The floors are the first reduced degrees of freedom."""
+    for i in range(reach.shape[1]):
+        for k in range(2 * n):
+            top = vec[s, i, k]
+            below = vec[s, i - 1, k] if i > 0 else 0.0 + 0.0j
+            reach[s, i, 0, k] = abs(top - below)
+            reach[s, i, 1, k] = abs(top.real) + abs(top.imag) + abs(below.real) + abs(below.imag)
 
 
 @njit(cache=True, inline='always')

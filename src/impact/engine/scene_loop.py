@@ -313,12 +313,90 @@ def _band_exit(w, lo, hi, size, escape, horizon, ek_tau):
     kpow, cs, ps, out = w.kpow, w.cs, w.ps, w.found
     delta = _contact_tol(hi - lo, bound_tab(kpow, cs, ps, 0, 0.0), size)
     if escape == 0 and horizon == ek_tau and _clear_of_walls(kpow, w.ek, cs, ps, lo, hi, horizon, delta):
-        out[0] = np.inf
-        out[1] = 0.0
-        out[2] = 0.0
-        out[3] = 1.0
+        _cleared(out)
     else:
         first_exit(w.kap, kpow, cs, ps, lo, hi, horizon, escape, delta, out)
+
+
+@njit(cache=True, inline='always')
+def _cleared(out):
+    """A search's output for a row _clear_of_walls settles: no event, one step."""
+    out[0] = np.inf
+    out[1] = 0.0
+    out[2] = 0.0
+    out[3] = 1.0
+
+
+#: the margin of a storey cleared from its reach (_storey_clear, _turning_clear), relative to the terms its row is
+#: made of: far above their round-off (a few eps), so that a storey cleared so is one its row's own test
+#: (_clear_of_walls, or first_exit's first step) clears too, and the run is the same to the bit
+_REACH_TOL = 1e-8
+
+
+@njit(cache=True, inline='always')
+def _modal_reach(w, s, i, d):
+    """Storey i's drift row in slot s from its reach (modal.storey_reach), without building it: with a_k = |d_k w_k|
+    (d_k: the storey's drift in mode k, w_k: the segment's modal amplitude), the sums of a_k |kap_k|^n for n = d,
+    d + 1, d + 2, and the size of the two floors' terms of the d-th derivative, which the row is rounded on."""
+    aw, kpow, reach = w.aw, w.kpow, w.reach
+    s0 = 0.0
+    s1 = 0.0
+    s2 = 0.0
+    size = 0.0
+    for k in range(2 * w.size[s]):
+        a = reach[s, i, 0, k] * aw[k]
+        s0 += a * kpow[d, k]
+        s1 += a * kpow[d + 1, k]
+        s2 += a * kpow[d + 2, k]
+        size += reach[s, i, 1, k] * aw[k] * kpow[d, k]
+    return s0, s1, s2, size
+
+
+@njit(cache=True, inline='always')
+def _storey_poly(P, i):
+    """The drift row's polynomial terms of tau^2 and tau^3 (a zero mode's particular solution)."""
+    if i == 0:
+        return P[0, 2], P[0, 3]
+    return P[i, 2] - P[i - 1, 2], P[i, 3] - P[i - 1, 3]
+
+
+@njit(cache=True, inline='always')
+def _storey_clear(w, s, i, lo, hi, big_t):
+    """Whether storey i's drift stays inside (lo, hi) over [0, T], farther from both ends than its row's round-off,
+    certified from the state and the slot's reach without building the row.
+
+    The drift starts at u0 with velocity du0, and its second derivative is at most m2 (the modes' sum of
+    |d_k w_k| |kap_k|^2 and the polynomial's), so over [0, T] it stays within m2 T^2 / 2 of u0 + du0 t.  The row's
+    own test adds its spread, m2 T^2 / 8 over the half row (equal to m2's to the basis' round-off, taken 4 % wider
+    here); first_exit's first step over a row cleared so spans the whole segment."""
+    q = w.q
+    u0 = storey_drift(q, i)
+    du0 = storey_drift(w.v, i)
+    p2, p3 = _storey_poly(w.P, i)
+    terms, _, m2, size = _modal_reach(w, s, i, 0)
+    m2 += 2.0 * abs(p2) + 6.0 * big_t * abs(p3)
+    curve = m2 * big_t * big_t * 0.63
+    below = abs(q[i - 1]) if i > 0 else 0.0
+    slack = _REACH_TOL * (terms + size + abs(q[i]) + below + hi - lo)
+    end = u0 + du0 * big_t
+    return max(u0, end) + curve + slack < hi and min(u0, end) - curve - slack > lo
+
+
+@njit(cache=True, inline='always')
+def _turning_clear(w, s, i, sign, big_t):
+    """Whether yielding storey i's drift velocity keeps its branch's sign over [0, T], farther from zero than its
+    row's round-off, certified from the state and the slot's reach without building the row: it starts at
+    sign du0 and moves by at most m2 T (m2: its derivative's bound, _storey_clear's), and the velocity row's own
+    test adds its spread, m3 T^2 / 8 (taken 4 % wider)."""
+    v = w.v
+    du0 = sign * storey_drift(v, i)
+    p2, p3 = _storey_poly(w.P, i)
+    terms, m2, m3, size = _modal_reach(w, s, i, 1)
+    m2 += 2.0 * abs(p2) + 6.0 * big_t * abs(p3)
+    m3 += 6.0 * abs(p3)
+    below = abs(v[i - 1]) if i > 0 else 0.0
+    slack = _REACH_TOL * (terms + size + abs(v[i]) + below)
+    return du0 - m2 * big_t - 0.13 * m3 * big_t * big_t - slack > 0.0
 
 
 @njit(cache=True, inline='always')
@@ -349,23 +427,26 @@ def _book_search(diag, out):
 
 
 @njit(cache=True, inline='always')
-def search_constraints(w, nf, units, springs, fric, yld, tau_max, r0, r1, ek_tau):
+def search_constraints(w, s, units, springs, fric, yld, tau_max, ramp, ek_tau, harmonic):
     """The next event of every row of the constraint table (bundles.Events: the damper units' rows first, a
     yielding building's storeys' after them), each row searched up to the earliest event found so far; returns
-    the earliest (inf if none up to tau_max).
+    the earliest (inf if none up to tau_max).  s: the segment's configuration slot; ramp: (r0, r1), the record's
+    value at the segment's start and its slope; harmonic: whether the load is harmonic.
 
     ek = exp(kap ek_tau): when ek_tau is the horizon, a row far from its band's ends is cleared without a search.
     The searched rows are weighted half rows (modal.halve): half the exponentials per evaluation.
     """
     ev_t = w.ev_t
     nu = units.mass.shape[0]
+    nf = w.C.shape[0] - nu
+    r0, r1 = ramp
     best = tau_max
     for j in range(nu):
         best = _search_unit(w, nf, j, units, springs, fric, r0, r1, best, ek_tau)
     if yld is not None:
         law = borrowed_storeys(yld)  # bound to each storey's step: borrowed, its arrays count no references
         for i in range(law.branch.shape[0]):
-            best = _search_storey(w, law, i, nu + i, best, ek_tau)
+            best = _search_storey(w, s, law, i, nu + i, best, ek_tau, harmonic)
     found = np.inf
     for r in range(ev_t.shape[0]):
         if ev_t[r] < found:
@@ -432,37 +513,68 @@ def _search_unit(w, nf, j, units, springs, fric, r0, r1, best, ek_tau):
 
 
 @njit(cache=True, inline='always')
-def _search_storey(w, yld, i, r, best, ek_tau):
+def _search_storey(w, s, yld, i, r, best, ek_tau, harmonic):
     """Storey i's row (row r of the table) on its branch: an elastic storey's drift u stays within d_y of its
-    plastic offset p (and within the collapse limit); a yielding one's drift velocity keeps the branch's sign s
-    (s u' >= 0) and its drift stays within the collapse limit.  Returns the earliest event time so far."""
-    kap, C, P, wt, out = w.kap, w.C, w.P, w.wt, w.found
-    ev_t, ev_kind, ev_side = w.ev_t, w.ev_kind, w.ev_side
-    ev_t[r] = np.inf
-    ev_kind[r] = EV_NONE
-    size = _difference_row(C, P, i, i - 1, w.cs, w.ps)
-    halve_from_start(kap, w.cs, w.ps, wt)
+    plastic offset p (and within the collapse limit); a yielding one's drift velocity keeps the branch's sign
+    (sign u' >= 0) and its drift stays within the collapse limit.  Returns the earliest event time so far.
+
+    A storey far from both ends of its band is cleared from its state and its slot s's reach before its row is
+    built (_storey_clear, _turning_clear): most of a record's sample steps."""
+    w.ev_t[r] = np.inf
+    w.ev_kind[r] = EV_NONE
+    if yld.branch[i] != BRANCH_ELASTIC:
+        return _search_yielding_storey(w, s, yld, i, r, best, ek_tau, harmonic)
+    out = w.found
     lim = yld.limit[i]
-    if yld.branch[i] == BRANCH_ELASTIC:
-        lo = max(yld.offset[i] - yld.yield_drift[i], -lim)
-        hi = min(yld.offset[i] + yld.yield_drift[i], lim)
-        if hi - lo < np.inf:
-            _band_exit(w, lo, hi, size, yld.escape[i], best, ek_tau)
-            _book_search(w.diag, out)
-            side = 1 if out[1] > 0.0 else -1
-            at_limit = hi == lim if side > 0 else lo == -lim
-            best = _earliest(out, best, True, r, EV_COLLAPSE if at_limit else EV_YIELD, side, ev_t, ev_side,
-                             ev_kind)
+    lo = max(yld.offset[i] - yld.yield_drift[i], -lim)
+    hi = min(yld.offset[i] + yld.yield_drift[i], lim)
+    if hi - lo == np.inf:
         return best
+    if yld.escape[i] == 0 and best == ek_tau and not harmonic and _storey_clear(w, s, i, lo, hi, best):
+        _cleared(out)  # as _band_exit's own shortcut would settle it
+        _book_search(w.diag, out)
+        return best
+    _band_exit(w, lo, hi, _storey_row(w, i), yld.escape[i], best, ek_tau)
+    _book_search(w.diag, out)
+    side = 1 if out[1] > 0.0 else -1
+    at_limit = hi == lim if side > 0 else lo == -lim
+    return _earliest(out, best, True, r, EV_COLLAPSE if at_limit else EV_YIELD, side, w.ev_t, w.ev_side, w.ev_kind)
+
+
+@njit(cache=True, inline='always')
+def _search_yielding_storey(w, s, yld, i, r, best, ek_tau, harmonic):
+    """A yielding storey's row: its drift velocity keeps the branch's sign, its drift stays within the collapse
+    limit.  Each is cleared from the storey's reach first (_turning_clear, _storey_clear), and the row is built
+    only for what that leaves to search."""
+    out, ev_t, ev_kind, ev_side = w.found, w.ev_t, w.ev_kind, w.ev_side
+    lim = yld.limit[i]
     sign = yld.branch[i]
-    _sign_exit(w, sign, yld.escape_v[i], best, ek_tau, True)
+    size = -1.0  # the row not built
+    if yld.escape_v[i] == 0 and best == ek_tau and not harmonic and _turning_clear(w, s, i, sign, best):
+        _cleared(out)  # as _sign_exit's own shortcut would settle it
+    else:
+        size = _storey_row(w, i)
+        _sign_exit(w, sign, yld.escape_v[i], best, ek_tau, True)
     _book_search(w.diag, out)
     best = _earliest(out, best, True, r, EV_UNLOAD, sign, ev_t, ev_side, ev_kind)
     if lim < np.inf:
-        _band_exit(w, -lim, lim, size, 0, best, -1.0)
+        if not harmonic and _storey_clear(w, s, i, -lim, lim, best):
+            _cleared(out)  # as first_exit settles it: in one step over the whole segment
+        else:
+            if size < 0.0:
+                size = _storey_row(w, i)
+            _band_exit(w, -lim, lim, size, 0, best, -1.0)
         _book_search(w.diag, out)
         best = _earliest(out, best, True, r, EV_COLLAPSE, 1 if out[1] > 0.0 else -1, ev_t, ev_side, ev_kind)
     return best
+
+
+@njit(cache=True, inline='always')
+def _storey_row(w, i):
+    """Storey i's drift row, halved, into w.cs, w.ps; returns the size it was rounded on (_difference_row)."""
+    size = _difference_row(w.C, w.P, i, i - 1, w.cs, w.ps)
+    halve_from_start(w.kap, w.cs, w.ps, w.wt)
+    return size
 
 
 @njit(cache=True, inline='always')
@@ -1144,8 +1256,8 @@ def _workspace(nt, nfull, nu, nrows, nmax, slots, nmon):
                       np.zeros((slots, nt, nt), dtype=np.complex128),
                       np.zeros((slots, nt, SINGLE_COLUMNS), dtype=np.complex128),
                       np.zeros((slots, nt, nt), dtype=np.complex128))
-    tables = Tables(modal_tables(slots, nmax, nmon), step, (np.zeros(7 * nmax), np.zeros(4 * nmax, dtype=np.complex128)),
-                    np.zeros(1, dtype=np.int64))
+    scratch = (np.zeros(7 * nmax), np.zeros(4 * nmax, dtype=np.complex128))
+    tables = Tables(modal_tables(slots, nmax, nmon, nrows - nu), step, scratch, np.zeros(1, dtype=np.int64))
     return Workspace(seg, rows, vecs, events, tables)
 
 
@@ -1330,7 +1442,7 @@ def _segment_work(ws, st, out, cache, load_vec):
     mtab, work = ws.tables.modal, ws.tables.work
     cache_b = ConfigCache(b(cache.key), b(cache.size), b(cache.lam), b(cache.vec), b(cache.vinv), b(cache.kinv),
                           b(cache.damping), b(cache.dof), b(cache.load), b(cache.forced), b(cache.mass))
-    mtab_b = ModalTables(b(mtab.key), b(mtab.gvis), b(mtab.lmod), b(mtab.mvec), b(mtab.mbnd))
+    mtab_b = ModalTables(b(mtab.key), b(mtab.gvis), b(mtab.lmod), b(mtab.mvec), b(mtab.mbnd), b(mtab.reach))
     return SegmentWork(b(seg.kap), b(seg.C), b(seg.P), b(seg.ek), b(seg.pair), b(seg.single), b(seg.ramp), b(seg.kpow),
                        b(rows.cs), b(rows.ps), b(rows.cq), b(rows.pq), b(rows.cm), b(rows.pm), b(rows.cv), b(rows.pv),
                        b(rows.cu), b(rows.pu), b(vecs.stack), b(vecs.found), b(vecs.reduced), b(vecs.moduli),
@@ -1338,7 +1450,7 @@ def _segment_work(ws, st, out, cache, load_vec):
                        b(st.escape), b(st.escape_v), b(st.q), b(st.v), b(out.diag), b(out.peak), b(out.peak_t),
                        b(out.x2), b(out.roundoff), cache_b.size, cache_b.lam, cache_b.vec, cache_b.vinv, cache_b.kinv,
                        cache_b.damping, cache_b.dof, cache_b.load, cache_b.forced, cache_b.mass, mtab_b.gvis,
-                       mtab_b.lmod, mtab_b.mvec, mtab_b.mbnd, b(work[0]), b(work[1]), (ws, st))
+                       mtab_b.lmod, mtab_b.mvec, mtab_b.mbnd, mtab_b.reach, b(work[0]), b(work[1]), (ws, st))
 
 
 @njit(cache=True)
@@ -1416,13 +1528,13 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
             tab_key = key
             tab_tau = tau_max
         diag[D_SEGMENTS] += 1.0
-        best = search_constraints(w, nf, units, springs, fric, yld, tau_max, r0, r1,
-                                  tab_tau if key == tab_key else -1.0)
-        event = best <= tau_max and best < np.inf
-        tau = best if event else tau_max
         n = cache.size[s]
         wc = work[1]  # the segment's modal amplitudes are wc[2n:4n] (build_segment)
         amplitude_moduli(n, wc, aw)
+        best = search_constraints(w, s, units, springs, fric, yld, tau_max, (r0, r1),
+                                  tab_tau if key == tab_key else -1.0, harm is not None)
+        event = best <= tau_max and best < np.inf
+        tau = best if event else tau_max
         if key != tab_key or tau != tab_tau:
             step_tables(s, key, tau, p[P_REC_DT] if record is not None else -1.0, kap, ek, pair, single, ramp, dtab)
             tab_key = key
