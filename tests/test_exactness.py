@@ -491,7 +491,8 @@ def test_identical_units_that_start_apart_and_fall_into_step_end_as_one_unit_of_
 
 #: scenes the probe at scale found breaking a promise (tools/probe_scenes.py, 3,000 scenes of up to 10 storeys,
 #: 4 dampers and 12 units, a quarter of them yielding), by (seed, index) (probe.scene_of draws them), each with
-#: the promise it broke and now keeps, and why it broke.
+#: the promise it broke and now keeps, and why it broke.  (Scenes that stop at their event budget, flagged, as
+#: 2067450001-2283 does, are too slow for the suite: the tool reproduces them.)
 AT_SCALE_SEED = 3761029462
 HELD_AT_SCALE = {
     # a unit released from its wall at zero relative speed came back through it before the escape's first look
@@ -574,7 +575,8 @@ HELD_AT_SCALE = {
     (1241593810, 438): "sample above a certified peak",
 }
 #: scenes the probe at scale found that the model now refuses by name: a PID or TMD tuned outside
-#: [MIN_TUNING, MAX_TUNING], and a storey within a twentieth of buckling under its weight (MAX_STABILITY).  3038120592-2847 (energy to 3.7e-7) broke through its TMD of tuning 0.040 (alone on
+#: [MIN_TUNING, MAX_TUNING], and a storey within a twentieth of buckling under its weight (MAX_STABILITY).
+#: 3038120592-2847 (energy to 3.7e-7) broke through its TMD of tuning 0.040 (alone on
 #: its building, with no impact, 3.9e-9; at 0.16, 8e-11; both before the dissipation's ramp form, which brought
 #: the TMD alone at 0.04 to 1e-11); 3761029462-2512 (1.7e-9) through its PID of tuning
 #: 400 (1.9e-10 at 100); 2067450001-2583 (yielding, 1.6e-8) through its TMD of tuning 548 (without it 1.7e-11;
@@ -670,7 +672,6 @@ def test_a_certified_peak_and_a_dense_sample_say_what_they_are_known_to():
     gravity) the floors' rows are metres for drifts of micrometres, so a sample is known to far less; the state the
     run carries is advanced from itself (segment.flow_change), not read off the rows, and the samples' stated
     round-off covers their distance from it (0.03 of it, measured)."""
-
     from impact.model.records import load_record
 
     load = GroundMotion.from_record(load_record("elcentro"), pga_g=0.35)
