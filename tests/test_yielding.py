@@ -226,6 +226,20 @@ def test_the_post_yield_stiffness_is_b_k_less_the_weight_each_storey_carries_ove
     assert _quake(b).post_yield_stiffness() is None
 
 
+def test_the_stability_coefficient_is_the_weight_carried_over_stiffness_times_height_dampers_included():
+    """theta = P / (k h): the building's own (the collapse stage's archetypes) from its floors, a scene's with its
+    dampers' weight too, both from the one formula on Building."""
+    b = Building.explicit([2e5, 1e5], [8e7, 5e7], storey_damping=[1e5, 1e5]).yielding(
+        0.02, 0.1, storey_height=[4.0, 3.0], p_delta=True)
+    heights = np.array([4.0, 3.0])
+    np.testing.assert_allclose(b.stability_coefficients(),
+                               np.array([3e5, 1e5]) * G_GRAV / (np.array([8e7, 5e7]) * heights), rtol=1e-15)
+    scene = _quake(b, dampers=(Damper("cid", 3e3, gap=0.05, e=0.5),), collapse_drift_ratio=0.1)
+    np.testing.assert_allclose(scene.stability_coefficients(),
+                               np.array([3.03e5, 1.03e5]) * G_GRAV / (np.array([8e7, 5e7]) * heights), rtol=1e-15)
+    assert replace(b, p_delta=False).stability_coefficients().tolist() == [0.0, 0.0]
+
+
 def test_a_perfectly_plastic_storey_needs_damping_and_collapse_needs_heights():
     undamped = Building.explicit([1.0], [1.0], storey_damping=[0.0])
     with pytest.raises(ParameterError, match="hardening = 0 without P-delta"):

@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.linalg import eigh
 
-from impact.model.params import ParameterError, _check, check_integer
+from impact.model.params import G_GRAV, ParameterError, _check, check_integer
 
 
 def _storey_matrix(k: np.ndarray) -> np.ndarray:
@@ -142,6 +142,20 @@ class Building:
         ratio b in [0, 1), storey heights in metres (for P-delta and the collapse limit), P-delta on or off."""
         return replace(self, yield_drift=yield_drift, hardening=float(hardening), storey_height=storey_height,
                        p_delta=bool(p_delta))
+
+    def geometric_stiffness(self, carried=None, gravity: float = G_GRAV) -> np.ndarray:
+        """P-delta's stiffness P_i / h_i of every storey, storey 1 first (zeros without P-delta): P_i is the weight,
+        at `gravity`, of the masses on every floor the storey carries; `carried` gives them per floor (a scene adds
+        its dampers' to the floors' own, which are the default)."""
+        if not self.p_delta:
+            return np.zeros(self.storeys)
+        carried = self.masses if carried is None else carried
+        return np.cumsum(carried[::-1])[::-1] * gravity / self.storey_height
+
+    def stability_coefficients(self, carried=None, gravity: float = G_GRAV) -> np.ndarray:
+        """Every storey's stability coefficient theta = P / (k h), ASCE 7's (zeros without P-delta), storey 1 first;
+        `carried` and `gravity` as in geometric_stiffness."""
+        return self.geometric_stiffness(carried, gravity) / self.storey_stiffness
 
     @property
     def is_elastic(self) -> bool:

@@ -409,20 +409,22 @@ class Scene:
     def floor_index(self, floor: int | None) -> int:
         return self.building.storeys - 1 if floor is None else int(floor) - 1
 
-    def geometric_stiffness(self) -> np.ndarray:
-        """P-delta's stiffness P_i / h_i of every storey (zeros without P-delta): P_i is the weight, at the scene's
-        gravity, of every floor and damper unit the storey carries."""
-        b = self.building
-        if not b.p_delta:
-            return np.zeros(b.storeys)
-        carried = b.masses.copy()
+    def carried_masses(self) -> np.ndarray:
+        """The mass on every floor, floor 1 first: the floor's own and its damper units'."""
+        carried = self.building.masses.copy()
         for _, d in self.unit_list():
             carried[self.floor_index(d.floor)] += d.mass / d.units
-        return np.cumsum(carried[::-1])[::-1] * self.gravity / b.storey_height
+        return carried
+
+    def geometric_stiffness(self) -> np.ndarray:
+        """P-delta's stiffness P_i / h_i of every storey (zeros without P-delta), Building.geometric_stiffness with
+        the dampers' weight and the scene's gravity."""
+        return self.building.geometric_stiffness(self.carried_masses(), self.gravity)
 
     def stability_coefficients(self) -> np.ndarray:
-        """Every storey's stability coefficient theta = P / (k h) (zeros without P-delta), storey 1 first."""
-        return self.geometric_stiffness() / self.building.storey_stiffness
+        """Every storey's stability coefficient theta = P / (k h) (zeros without P-delta), storey 1 first, with the
+        dampers' weight and the scene's gravity."""
+        return self.building.stability_coefficients(self.carried_masses(), self.gravity)
 
     def post_yield_stiffness(self) -> np.ndarray | None:
         """Every storey's stiffness on its yielding branch, b k - P/h (N/m), storey 1 first; None for a building

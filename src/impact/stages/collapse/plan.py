@@ -56,12 +56,6 @@ def archetype(cfg: dict, ida: dict, loads: dict, building_name: str) -> Building
                             p_delta=True)
 
 
-def stability_coefficients(building: Building) -> np.ndarray:
-    """ASCE 7's theta per storey: the weight it carries over its elastic stiffness times its height."""
-    carried = np.cumsum(building.masses[::-1])[::-1] * G_GRAV
-    return carried / (building.storey_stiffness * building.storey_height)
-
-
 def stability_limit(cfg: dict) -> float:
     """ASCE 7-16 12.8.7's theta_max = 0.5 / (beta Cd) <= 0.25, with beta = 1 (the demand-to-capacity ratio's bound)."""
     return min(0.5 / cfg["Cd"], 0.25)
@@ -77,7 +71,7 @@ def check_config(cfg: dict, ida: dict | None, loads: dict | None) -> None:
         raise ParameterError(f"collapse.hunt.max_sa_g = {hunt['max_sa_g']} must exceed collapse.hunt.first_sa_g = "
                              f"{hunt['first_sa_g']}")
     for name in buildings(loads):
-        theta = stability_coefficients(archetype(cfg, ida, loads, name))
+        theta = archetype(cfg, ida, loads, name).stability_coefficients()
         if theta.max() > MAX_STABILITY:
             raise ParameterError(f"collapse: building {name} buckles, or nearly, under its own weight (P-delta's "
                                  f"stability coefficient {theta.max():.2f} in a storey, allowed at most "

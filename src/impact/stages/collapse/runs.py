@@ -18,7 +18,7 @@ from impact.model.suites import load_suite_record
 from impact.outputs.files import as_integers, flag
 from impact.outputs.labels import EVENT_CAP_MEANINGS
 from impact.stages.collapse.p695 import archetype_numbers
-from impact.stages.collapse.plan import archetype, code_period, hunt_levels, stability_coefficients, stability_limit
+from impact.stages.collapse.plan import archetype, code_period, hunt_levels, stability_limit
 from impact.stages.ida.runs import STROKE_LIMIT_ATTRS, design_peak, designed_damper, scaled_motion
 
 INITIAL_CONDITION = ("building at rest with no plastic drift; an impact damper's mass centred between its walls; "
@@ -257,7 +257,7 @@ def _pushover_dataset(numbers: dict, building: Building, theta_max: float) -> xr
                          "units": "m"}),
         "storey_strength": ("storey", building.yield_drift * building.storey_stiffness,
                             {"long_name": "storey shear strength by the design rule", "units": "N"}),
-        "stability_coefficient": ("storey", stability_coefficients(building),
+        "stability_coefficient": ("storey", building.stability_coefficients(),
                                   {"long_name": "P-delta stability coefficient theta: weight carried over elastic "
                                                 "stiffness times storey height", "units": "1"}),
     }, coords={"storey": np.arange(1, building.storeys + 1)})
