@@ -50,11 +50,16 @@ MonitorArrays = namedtuple("MonitorArrays", "rows kind record_coef cap")
 #: the paper loop's workspace (paper_loop._loop, every array borrowed): its complex rows over the seven slots (the
 #: exponents kap, x's and y's coefficients cx cy, the gap row cs, the velocity row cv, a contact row cq, the force
 #: row cf, exp(kap tau) eh, |kap|^n kpow and the exponents it was made for), the polynomial parts (poly; pp as the
-#: search takes it), the searches' outputs (ev, ev2), the contact state c (paper_loop.C_*), the run's parameters
+#: search takes it), the searches' outputs (ev, ev2), the contact state c (a ContactState), the run's parameters
 #: p, its state z, diagnostics and impact records
 #: one call of the paper loop for its dense output (sampler.paper_samples): its parameters, the PID's eigen-data, and
 #: where it writes (impact records, diagnostics, the final state)
 PaperCall = namedtuple("PaperCall", "p pid rec diag z_out")
+
+#: the paper loop's one unit's contact state, as the scene loop's RunState holds every unit's (arrays of one): mode
+#: (layout.MODE_*), wall side (+-1, 0), slide sign sigma (+-1, 0), and the escapes of the next segment's gap and slide
+#: searches (the boundary each starts on and leaves); contact.py's transitions set it
+ContactState = namedtuple("ContactState", "mode side sigma escape escape_v")
 
 PaperWork = namedtuple("PaperWork", "kap cx cy cs cv cq cf eh kpow kap_powered poly pp ev ev2 c p z diag rec")
 

@@ -14,10 +14,19 @@ hitting together get identical impulses and move as one unit of their total
 mass.  Floors do not exchange impulses (the storeys are springs), so floors
 are independent.
 
-Both loops of the engine share from here what they decide at an event: whether
-a wall keeps holding a unit (stays), whether friction holds it on its floor
-(floor_decision), the plastic end of a rebound too slow to resolve
-(plastic_end), and the guard on a run's events (event_cap_reached).
+Both loops of the engine share from here what they decide at an event and what
+follows from it, one state machine of a unit's contact:
+
+- the decisions: whether a wall keeps holding a unit (stays), whether friction
+  holds it on its floor (floor_decision), whether a rebound is too slow to
+  resolve (rebound_too_slow) and its plastic end then (plastic_end);
+- the transitions between the modes (layout.MODE_*), each a function over a
+  unit's row of a contact state (any bundle with the arrays mode, side, sigma,
+  escape, escape_v: the scene loop's RunState, the paper loop's ContactState of
+  its one unit): meet_wall, leave_wall, rebound, hold, start_slide,
+  rest_on_floor, slip, slide_with;
+- an impact's record (record_impact) and the guard on a run's events
+  (event_cap_reached).
 """
 
 from __future__ import annotations
@@ -28,7 +37,7 @@ import numpy as np
 from numba import njit
 
 from impact.engine import layout as L
-from impact.engine.layout import MODE_LOCKED
+from impact.engine.layout import MODE_FLOOR, MODE_FREE, MODE_LOCKED, MODE_STUCK
 
 #: relative velocity below which a rebound is treated as sticking, in units of the load's velocity scale
 #: (F0/K * omega for the paper's system); far below any resolved rebound
@@ -215,6 +224,96 @@ def floor_decision(kap, cq, pq, a_f):
     """slide_decision for a unit on a floor: sticking needs |x_f'' - a| <= a_f (row cq, pq)."""
     q, scale = derivatives_at0(kap, cq, pq)
     return slide_decision(q, scale, a_f, _ZERO_TOL)
+
+
+@njit(cache=True, inline='always')
+def rebound_too_slow(push, rebound, tol):
+    """Whether a rebound at relative speed `rebound`, pushed back at `push` (the gap row's second derivative
+    towards the wall), has an excursion v^2 / (2 push) within the contact tolerance `tol`: then it cannot be
+    resolved, and the unit rests on the wall."""
+    return push > 0.0 and rebound * rebound < 2.0 * tol * push
+
+
+# the state machine's transitions: each sets a unit's contact state (mode, wall side, slide sign, and the escapes of
+# its next searches from the boundary it starts on), the same in both loops
+
+@njit(cache=True, inline='always')
+def meet_wall(st, j, side, friction):
+    """Unit j meets the wall on `side` (it strikes or touches it, or the wall moves away from it): with friction,
+    a slide from here can only be away from that wall."""
+    st.side[j] = side
+    if friction:
+        st.sigma[j] = -side
+
+
+@njit(cache=True, inline='always')
+def leave_wall(st, j, friction):
+    """The wall on st.side[j] stops holding unit j, which leaves it at its floor's speed: free, its gap search
+    escaping that wall; with friction it slides away from the wall, its slide search escaping s' = 0."""
+    st.mode[j] = MODE_FREE
+    st.escape[j] = st.side[j]
+    if friction:
+        st.sigma[j] = -st.side[j]
+        st.escape_v[j] = -1
+
+
+@njit(cache=True, inline='always')
+def rebound(st, j):
+    """Unit j rebounds from the wall on st.side[j]: free, its gap search escaping that wall."""
+    st.mode[j] = MODE_FREE
+    st.escape[j] = st.side[j]
+
+
+@njit(cache=True, inline='always')
+def hold(st, j):
+    """The wall on st.side[j] holds unit j: it moves with its floor until the wall lets go."""
+    st.mode[j] = MODE_STUCK
+
+
+@njit(cache=True, inline='always')
+def start_slide(st, j, sigma):
+    """Friction stops holding unit j on its floor: it slides with sign sigma, its slide search escaping s' = 0."""
+    st.mode[j] = MODE_FREE
+    st.sigma[j] = sigma
+    st.escape_v[j] = -1
+
+
+@njit(cache=True, inline='always')
+def slide_with(st, j, rel):
+    """Friction opposes unit j's motion rel relative to its floor, which is not zero: it slides with the sign of rel,
+    its slide search starting away from s' = 0."""
+    st.sigma[j] = 1 if rel > 0.0 else -1
+    st.escape_v[j] = 0
+
+
+@njit(cache=True, inline='always')
+def slip(st, j, rel):
+    """Friction held unit j on its floor, and the floor's velocity jumped under it (an impulse friction cannot pass
+    on): it slides, at rel relative to the floor."""
+    st.mode[j] = MODE_FREE
+    slide_with(st, j, rel)
+
+
+@njit(cache=True, inline='always')
+def rest_on_floor(st, j):
+    """Unit j's slide stops: friction holds it on its floor, if it can (floor_decision)."""
+    st.mode[j] = MODE_FLOOR
+
+
+@njit(cache=True, inline='always')
+def record_impact(row, t, unit, side, x, v0, w0, v1, w1, stuck, impulse):
+    """One impact's record (layout.R_*): its time, unit and wall, the floor's place, the floor's and the unit's
+    velocities before and after, whether the unit stuck, and Newton's impulse (a plastic end is not in it)."""
+    row[L.R_T] = t
+    row[L.R_UNIT] = unit
+    row[L.R_SIDE] = side
+    row[L.R_X] = x
+    row[L.R_V0] = v0
+    row[L.R_W0] = w0
+    row[L.R_V1] = v1
+    row[L.R_W1] = w1
+    row[L.R_STUCK] = 1.0 if stuck else 0.0
+    row[L.R_IMPULSE] = impulse
 
 
 STALL_EVENTS, STALL_SPAN = 1000, 1e-9  # this many events within this fraction of a period: no progress

@@ -29,11 +29,13 @@ The PID's eigen-data arrive as a tuple, the CID's as None: numba prunes the
 branch that does not apply, so a CID run never compiles the pendulum path.
 
 The loop reads the engine's one index layout (layout.py) and shares with the
-scene loop the certified search (events.first_exit), the contact decisions
-(contact.stays, contact.floor_decision), the plastic end of a rebound
-(contact.plastic_end), the row bound and |kap| powers (segment.bound_tab,
-kappa_powers); what it keeps is the one-unit algebra above, which the scene
-loop writes for any number of units and so rounds differently.
+scene loop the certified search (events.first_exit), the row bound and |kap|
+powers (segment.bound_tab, kappa_powers), and the contact's one state machine
+(contact.py): its decisions (stays, floor_decision, rebound_too_slow,
+plastic_end), its transitions, which set this loop's ContactState as they set
+the scene loop's RunState, the impact record and the guard on events.  What it
+keeps is the one-unit algebra above, which the scene loop writes for any number
+of units and so rounds differently.
 """
 
 from __future__ import annotations
@@ -43,9 +45,10 @@ import math
 import numpy as np
 from numba import njit
 
+from impact.engine import contact
 from impact.engine import layout as L
-from impact.engine.bundles import PaperWork, borrowed
-from impact.engine.contact import CONTACT_TOL, event_cap_reached, floor_decision, plastic_end, stays
+from impact.engine.bundles import ContactState, PaperWork, borrowed
+from impact.engine.contact import CONTACT_TOL
 from impact.engine.events import first_exit
 from impact.engine.segment import bound_tab, deriv_at0, kappa_powers
 
@@ -282,7 +285,7 @@ def _stays_stuck(kap, cx, p, side, a_f, cq, pq):
         cq[k] = side * cx[k] * kap[k] * kap[k]
     _poly4(pq, 0.0, 0.0)
     pq[0] = p[L.P_WP] ** 2 * 0.5 * p[L.P_GAP] - a_f
-    return stays(kap, cq, pq)
+    return contact.stays(kap, cq, pq)
 
 
 @njit(cache=True)
@@ -311,7 +314,7 @@ def _apply_impact(z, side, p, diag):
 @njit(cache=True)
 def _stick(z, p, diag):
     """Perfectly plastic end of a rebound (contact.plastic_end), the loss booked; the structure's mass is 1."""
-    vc, lost = plastic_end(p[L.P_MU], z[3], 1.0, z[1])
+    vc, lost = contact.plastic_end(p[L.P_MU], z[3], 1.0, z[1])
     diag[L.D_IMPLOSS] += lost
     z[1] = vc
     z[3] = vc
@@ -324,7 +327,7 @@ def _floor_decision(kap, cx, a_f, cq, pq):
     for k in range(NT):
         cq[k] = cx[k] * kap[k] * kap[k]
     _poly4(pq, 0.0, 0.0)
-    return floor_decision(kap, cq, pq, a_f)
+    return contact.floor_decision(kap, cq, pq, a_f)
 
 
 @njit(cache=True)
@@ -368,53 +371,27 @@ _decode_contact = njit(cache=True, inline='always')(decode_contact)
 # the run: a loop over segments, each read as its named steps
 # ----------------------------------------------------------------------------
 
-# the loop's contact state, one integer array that the steps read and the step that changes it writes: the mode
-# (layout.MODE_*), the wall side (+-1, 0), the slide's sign sigma (+-1, 0), and the escape flags of the next
-# segment's gap and slide searches (the boundary each starts on and leaves)
-C_MODE, C_SIDE, C_SIGMA, C_ESCAPE, C_ESCAPE_V = 0, 1, 2, 3, 4
-NCONTACT = 5
-
-
-@njit(cache=True, inline='always')
-def _leave_wall(c, side, fric):
-    """The mass leaves the wall on `side` (released, or not held after it stuck): free flight, its gap search
-    escaping that wall; with friction it slides away from the wall, its slide search escaping s' = 0."""
-    c[C_MODE] = L.MODE_FREE
-    c[C_ESCAPE] = side
-    if fric is not None:
-        c[C_SIGMA] = -side
-        c[C_ESCAPE_V] = -1
-
-
-@njit(cache=True, inline='always')
-def _start_slide(c, sigma):
-    """The floor stops holding the mass, which slides with sign sigma (its slide search escaping s' = 0)."""
-    c[C_MODE] = L.MODE_FREE
-    c[C_SIGMA] = sigma
-    c[C_ESCAPE_V] = -1
-
-
 @njit(cache=True, inline='always')
 def _build_motion(w, t, pid, fric, a_f):
     """The segment's motion in coefficient form for the contact mode; True when the contact changes before the
     segment starts (the floor lets the mass slide, or the wall no longer holds it): the loop then starts again."""
     kap, cx, cy, poly, z, p, cq, pp, c = w.kap, w.cx, w.cy, w.poly, w.z, w.p, w.cq, w.pp, w.c
-    mode = c[C_MODE]
+    mode = c.mode[0]
     if mode == L.MODE_FREE:
-        build_free_flight(kap, cx, cy, poly, z, t, p, pid, fric, c[C_SIGMA])
+        build_free_flight(kap, cx, cy, poly, z, t, p, pid, fric, c.sigma[0])
     elif mode == L.MODE_FLOOR:
         _build_combined(kap, cx, cy, poly, z, t, p, z[2] - z[0])
         if fric is not None:
             slide = _floor_decision(kap, cx, a_f, cq, pp)
             if slide != 0:
-                _start_slide(c, slide)
+                contact.start_slide(c, 0, slide)
                 return True
     else:
-        side = c[C_SIDE]
+        side = c.side[0]
         half = 0.5 * p[L.P_GAP]
         _build_combined(kap, cx, cy, poly, z, t, p, side * half if mode == L.MODE_STUCK else 0.0)
         if mode == L.MODE_STUCK and not _stays_stuck(kap, cx, p, side, a_f, cq, pp):
-            _leave_wall(c, side, fric)
+            contact.leave_wall(c, 0, fric is not None)
             return True
     return False
 
@@ -436,7 +413,7 @@ def _search_event(w, fric, a_f, tau_max):
     steps).  Returns its kind: 1 the mode's own (an impact, the wall letting go, the floor letting the mass
     slide), 2 a slide coming to rest."""
     kap, kpow, cx, cy, cs, cq, poly, pp, p, c, ev = w.kap, w.kpow, w.cx, w.cy, w.cs, w.cq, w.poly, w.pp, w.p, w.c, w.ev
-    mode = c[C_MODE]
+    mode = c.mode[0]
     d = p[L.P_GAP]
     half = 0.5 * d
     if mode == L.MODE_FREE:
@@ -445,11 +422,11 @@ def _search_event(w, fric, a_f, tau_max):
         _halve(kap, cs)
         delta = CONTACT_TOL * (bound_tab(kpow, cs, _NO_POLY, 0, 0.0) + d)
         _poly4(pp, poly[0], poly[1])
-        first_exit(kap, kpow, cs, pp, -half, half, tau_max, c[C_ESCAPE], delta, ev)
+        first_exit(kap, kpow, cs, pp, -half, half, tau_max, c.escape[0], delta, ev)
         if fric is not None:
             return _search_slide_stop(w, tau_max)
     elif mode == L.MODE_STUCK:
-        side = c[C_SIDE]
+        side = c.side[0]
         for k in range(NT):
             cq[k] = side * cx[k] * kap[k] * kap[k]
         _halve(kap, cq)
@@ -485,13 +462,13 @@ def _search_slide_stop(w, tau_max):
     """A sliding mass's slide stopping (sigma s' > 0 while it slides, 0 where it stops) before the gap's event:
     2 if it comes first (w.ev then holds it), else 1."""
     kap, kpow, cs, cq, poly, pp, c, ev, ev2 = w.kap, w.kpow, w.cs, w.cq, w.poly, w.pp, w.c, w.ev, w.ev2
-    sigma = c[C_SIGMA]
+    sigma = c.sigma[0]
     for k in range(NT):
         cq[k] = sigma * cs[k] * kap[k]
     cq[6] += sigma * poly[0]
     dv = CONTACT_TOL * (bound_tab(kpow, cq, _NO_POLY, 0, 0.0) + 2.0 * abs(poly[1]))
     _poly4(pp, 2.0 * sigma * poly[1], 0.0)
-    first_exit(kap, kpow, cq, pp, 0.0, np.inf, min(ev[0], tau_max), c[C_ESCAPE_V], dv, ev2)
+    first_exit(kap, kpow, cq, pp, 0.0, np.inf, min(ev[0], tau_max), c.escape_v[0], dv, ev2)
     w.diag[L.D_STEPS] += ev2[3]
     if ev2[0] < ev[0]:
         ev[0] = ev2[0]
@@ -525,7 +502,7 @@ def _advance(w, fric, a_f, t, tau):
             diag[L.D_X2WIN] += _int_prod0(kap, eh, cx, cx, tau)
         else:
             diag[L.D_X2WIN] += _int_prod(kap, cx, cx, t_win - t, tau)
-    if c[C_MODE] != L.MODE_FREE:
+    if c.mode[0] != L.MODE_FREE:
         diag[L.D_STUCKTIME] += tau
     s_start = z[2] - z[0]
     _state_from(kap, eh, cx, cy, poly[0], poly[1], tau, z)
@@ -533,9 +510,9 @@ def _advance(w, fric, a_f, t, tau):
     if e_now > diag[L.D_EMAX]:
         diag[L.D_EMAX] = e_now
     if fric is not None:
-        if c[C_MODE] == L.MODE_FREE:
+        if c.mode[0] == L.MODE_FREE:
             # s' keeps its sign on a sliding segment: the work is exact
-            diag[L.D_FRICTION] += p[L.P_MU] * a_f * c[C_SIGMA] * (z[2] - z[0] - s_start)
+            diag[L.D_FRICTION] += p[L.P_MU] * a_f * c.sigma[0] * (z[2] - z[0] - s_start)
 
 
 @njit(cache=True, inline='always')
@@ -550,100 +527,82 @@ def _book_stop(diag, stop, ev_kind, mode, ev_side):
 @njit(cache=True, inline='always')
 def _resolve_event(w, t, pid, fric, a_f, ev_kind, ev_side, irec):
     """The contact's answer to the event at t: a slide comes to rest or starts, the wall lets go, or the mass
-    strikes wall ev_side (then the impact, whether the mass sticks and whether the wall holds it, and its
-    record).  Returns the number of impact records written."""
+    strikes or touches wall ev_side (then the impact, whether the mass rests on the wall and whether the wall holds
+    it, and its record).  Returns the number of impact records written."""
     z, p, c, diag, rec = w.z, w.p, w.c, w.diag, w.rec
     half = 0.5 * p[L.P_GAP]
-    mode = c[C_MODE]
+    mode = c.mode[0]
     if fric is not None:
         if ev_kind == 2:
             # the slide ends: the floor holds the mass or it slides back
             z[3] = z[1]
-            c[C_MODE] = L.MODE_FLOOR
+            contact.rest_on_floor(c, 0)
             return irec
         if mode == L.MODE_FLOOR:
             # the floor can no longer drag the mass along: it slides
             z[3] = z[1]
-            _start_slide(c, -ev_side)
+            contact.start_slide(c, 0, -ev_side)
             return irec
     if mode == L.MODE_STUCK:
         # release: the wall stops holding the mass, which leaves with s' = 0
-        side = c[C_SIDE]
-        z[2] = z[0] + side * half
+        z[2] = z[0] + c.side[0] * half
         z[3] = z[1]
-        _leave_wall(c, side, fric)
+        contact.leave_wall(c, 0, fric is not None)
         return irec
-    s_now = z[2] - z[0]
-    pen = abs(s_now) - half
+    pen = abs(z[2] - z[0]) - half
     if pen > diag[L.D_PEN]:
         diag[L.D_PEN] = pen
     approach = ev_side * (z[3] - z[1])
     vm = z[1]
     wm = z[3]
     if approach <= 0.0:
-        # touched within contact tolerance while already separating
+        # touched within contact tolerance while already separating: at a speed below the sticking one it rests
+        # there, else it is judged as a rebound, which rests on the wall if it cannot clear the tolerance (the
+        # scene loop decides the same)
         z[2] = z[0] + ev_side * half
-        c[C_ESCAPE] = ev_side
+        resting = abs(z[3] - z[1]) < p[L.P_VSTICK]
+        if resting:
+            _stick(z, p, diag)
+        _settle_at_wall(w, t, pid, fric, a_f, ev_side, resting)
         return irec
     diag[L.D_IMPACTS] += 1.0
     if t >= p[L.P_TWIN]:
         diag[L.D_IMPACTS_WIN] += 1.0
-    _strike(w, t, pid, fric, a_f, ev_side)
+    _settle_at_wall(w, t, pid, fric, a_f, ev_side, _apply_impact(z, ev_side, p, diag))
     if irec < rec.shape[0]:
-        _record_impact(rec[irec], t, c, z, vm, wm, approach, p)
+        # Newton's impulse alone, as solve_impulses gives it in the scene loop
+        impulse = p[L.P_MU] * (1.0 + p[L.P_E]) * approach / (1.0 + p[L.P_MU])
+        contact.record_impact(rec[irec], t, 0.0, c.side[0], z[0], vm, wm, z[1], z[3], c.mode[0] == L.MODE_STUCK, impulse)
         irec += 1
     return irec
 
 
 @njit(cache=True, inline='always')
-def _strike(w, t, pid, fric, a_f, side):
-    """The impact on wall `side` (Newton's law), then the mass's contact: it rebounds, or it sticks (a rebound
-    too slow to clear the contact tolerance is a plastic end) and the wall holds it or lets it go."""
+def _settle_at_wall(w, t, pid, fric, a_f, side, resting):
+    """The mass's contact after it struck or touched wall `side` (resting: it already moves with the structure): a
+    rebound too slow to clear the contact tolerance ends plastically (contact.rebound_too_slow), and a mass resting
+    on the wall is held or let go (contact.stays)."""
     kap, kpow, cx, cy, cs, cq, pp, poly, z, p, c, diag = (w.kap, w.kpow, w.cx, w.cy, w.cs, w.cq, w.pp, w.poly, w.z,
                                                           w.p, w.c, w.diag)
-    stuck = _apply_impact(z, side, p, diag)
-    c[C_SIDE] = side
-    if fric is not None:
-        c[C_SIGMA] = -side
-    if not stuck:
-        # a rebound whose excursion v^2 / (2 a) cannot clear the contact
-        # tolerance is unresolvable: the mass stays at the wall
-        build_free_flight(kap, cx, cy, poly, z, t, p, pid, fric, c[C_SIGMA])
+    contact.meet_wall(c, 0, side, fric is not None)
+    if not resting:
+        build_free_flight(kap, cx, cy, poly, z, t, p, pid, fric, c.sigma[0])
         for k in range(NT):
             cs[k] = cy[k] - cx[k]
         push = side * (deriv_at0(kap, cs, _NO_POLY, 2) + 2.0 * poly[1])
-        rebound = z[3] - z[1]
         tol = CONTACT_TOL * (bound_tab(kpow, cs, _NO_POLY, 0, 0.0) + p[L.P_GAP])
-        if push > 0.0 and rebound * rebound < 2.0 * tol * push:
+        if contact.rebound_too_slow(push, z[3] - z[1], tol):
             _stick(z, p, diag)
-            stuck = True
-    if stuck:
-        # decide whether the wall holds the mass
-        _build_combined(kap, cx, cy, poly, z, t, p, side * (0.5 * p[L.P_GAP]))
-        if _stays_stuck(kap, cx, p, side, a_f, cq, pp):
-            c[C_MODE] = L.MODE_STUCK
-            diag[L.D_STICKS] += 1.0
-        else:
-            _leave_wall(c, side, fric)
+            resting = True
+    if not resting:
+        contact.rebound(c, 0)
+        return
+    _build_combined(kap, cx, cy, poly, z, t, p, side * (0.5 * p[L.P_GAP]))
+    if _stays_stuck(kap, cx, p, side, a_f, cq, pp):
+        contact.hold(c, 0)
+        diag[L.D_STICKS] += 1.0
     else:
-        c[C_MODE] = L.MODE_FREE
-        c[C_ESCAPE] = side
-
-
-@njit(cache=True, inline='always')
-def _record_impact(row, t, c, z, vm, wm, approach, p):
-    """One impact's record (layout.R_*): its time, wall, the velocities before and after, whether the mass stuck,
-    and Newton's impulse alone, as solve_impulses gives it in the scene loop (a plastic end is not in it)."""
-    row[L.R_T] = t
-    row[L.R_UNIT] = 0.0
-    row[L.R_SIDE] = c[C_SIDE]
-    row[L.R_X] = z[0]
-    row[L.R_V0] = vm
-    row[L.R_W0] = wm
-    row[L.R_V1] = z[1]
-    row[L.R_W1] = z[3]
-    row[L.R_STUCK] = 1.0 if c[C_MODE] == L.MODE_STUCK else 0.0
-    row[L.R_IMPULSE] = p[L.P_MU] * (1.0 + p[L.P_E]) * approach / (1.0 + p[L.P_MU])
+        contact.leave_wall(c, 0, fric is not None)
 
 
 @njit(cache=True, inline='always')
@@ -651,24 +610,28 @@ def _initial_contact(c, code_init, z, p, fric):
     """The contact state a run starts in, into c, from its code (encode_contact) and state: no gap locks the
     mass; a state just after an impact (a closed-form orbit) escapes its wall; with friction, a mass moving with
     the floor rests on it, and one that moves relative to it slides."""
-    c[C_MODE], c[C_SIDE], c[C_SIGMA] = _decode_contact(code_init)
+    mode, side, sigma = _decode_contact(code_init)
+    c.mode[0] = mode
+    c.side[0] = side
+    c.sigma[0] = sigma
     d = p[L.P_GAP]
     if d == 0.0:
-        c[C_MODE] = L.MODE_LOCKED
-    side = c[C_SIDE]
-    if c[C_MODE] == L.MODE_FREE and side != 0 and abs(z[2] - z[0]) >= 0.5 * d * (1.0 - CONTACT_TOL) and d > 0.0:
-        c[C_ESCAPE] = side
+        c.mode[0] = L.MODE_LOCKED
+    if c.mode[0] == L.MODE_FREE and side != 0 and abs(z[2] - z[0]) >= 0.5 * d * (1.0 - CONTACT_TOL) and d > 0.0:
+        c.escape[0] = side
     if fric is not None:
-        if c[C_MODE] == L.MODE_FREE and z[3] == z[1]:
-            c[C_MODE] = L.MODE_FLOOR
-        elif c[C_MODE] == L.MODE_FREE and c[C_SIGMA] == 0:
-            c[C_SIGMA] = 1 if z[3] > z[1] else -1
+        if c.mode[0] == L.MODE_FREE and z[3] == z[1]:
+            c.mode[0] = L.MODE_FLOOR
+        elif c.mode[0] == L.MODE_FREE and c.sigma[0] == 0:
+            contact.slide_with(c, 0, z[3] - z[1])
 
 
-# the run's workspace: complex rows over the coefficient slots, and its real vectors, sliced into views
+# the run's workspace: complex rows over the coefficient slots, its real vectors and its contact state's integers,
+# sliced into views
 W_KAP, W_CX, W_CY, W_CS, W_CV, W_CQ, W_CF, W_EH, W_POWERED = range(9)
 NROWS = 9
 V_POLY, V_PP, V_EV, V_EV2, NVEC = 0, 2, 6, 10, 14
+NCONTACT = len(ContactState._fields)
 
 
 @njit(cache=True)
@@ -694,10 +657,11 @@ def _loop(p, z_init, code_init, pid, fric, rec, diag, z_out, owners):
     taken borrowed (bundles.borrowed: no reference of its own), so handing the bundle to a step costs no
     reference count: the counts were a quarter of a run when the loop was written as these steps."""
     rows, kpow, vec, clock, c = owners
-    rows, vec, clock = borrowed(rows), borrowed(vec), borrowed(clock)
+    rows, vec, clock, c = borrowed(rows), borrowed(vec), borrowed(clock), borrowed(c)
+    state = ContactState(c[0:1], c[1:2], c[2:3], c[3:4], c[4:5])
     w = PaperWork(rows[W_KAP], rows[W_CX], rows[W_CY], rows[W_CS], rows[W_CV], rows[W_CQ], rows[W_CF], rows[W_EH],
                   borrowed(kpow), rows[W_POWERED], vec[V_POLY:V_PP], vec[V_PP:V_EV], vec[V_EV:V_EV2],
-                  vec[V_EV2:NVEC], borrowed(c), borrowed(p), borrowed(z_out), borrowed(diag), borrowed(rec))
+                  vec[V_EV2:NVEC], state, borrowed(p), borrowed(z_out), borrowed(diag), borrowed(rec))
     z, ev, c, diag = w.z, w.ev, w.c, w.diag
     for i in range(L.NDIAG):
         diag[i] = 0.0
@@ -723,16 +687,16 @@ def _loop(p, z_init, code_init, pid, fric, rec, diag, z_out, owners):
         tau = min(ev[0], tau_max)
         _advance(w, fric, a_f, t, tau)
         t = t + tau
-        c[C_ESCAPE] = 0
-        c[C_ESCAPE_V] = 0
+        c.escape[0] = 0
+        c.escape_v[0] = 0
         if ev[0] > tau_max:
             break
-        stop = event_cap_reached(t, p, clock)  # the caps on events per period and per run, and the stall guard
+        stop = contact.event_cap_reached(t, p, clock)  # the caps on events per period and per run, and the stall guard
         if stop != 0:
-            _book_stop(diag, stop, ev_kind, c[C_MODE], ev[1])
+            _book_stop(diag, stop, ev_kind, c.mode[0], ev[1])
             break
         irec = _resolve_event(w, t, pid, fric, a_f, ev_kind, int(ev[1]), irec)
     diag[L.D_E1] = _energy(z, p)
     diag[L.D_NREC] = irec
     diag[L.D_TEND] = t
-    return encode_contact(c[C_MODE], c[C_SIDE], c[C_SIGMA])
+    return encode_contact(c.mode[0], c.side[0], c.sigma[0])

@@ -54,8 +54,18 @@ from impact.engine.contact import (
     floor_decision,
     floor_mass,
     floor_row,
+    hold,
+    leave_wall,
+    meet_wall,
     plastic_end,
+    rebound,
+    rebound_too_slow,
+    record_impact,
+    rest_on_floor,
+    slide_with,
+    slip,
     solve_impulses,
+    start_slide,
     stays,
     stuck_row,
 )
@@ -112,16 +122,6 @@ from impact.engine.layout import (
     P_TWIN,
     P_VSTICK,
     P_WINDOW,
-    R_IMPULSE,
-    R_SIDE,
-    R_STUCK,
-    R_T,
-    R_UNIT,
-    R_V0,
-    R_V1,
-    R_W0,
-    R_W1,
-    R_X,
     UNIT_SPRING,
     UNIT_WALLS,
 )
@@ -1005,8 +1005,7 @@ def settle(t, model, springs, fric, harm, record, yld, st, scratch):
     Repeats until no unit changes, since every change alters the floors' motion.
     """
     p, building, units, load_vec = model.p, model.building, model.units, model.load_vec
-    mode, side, sigma, offset, escape, escape_v, check, v = (st.mode, st.side, st.sigma, st.offset, st.escape,
-                                                             st.escape_v, st.check, st.v)
+    mode, side, offset, check, v = st.mode, st.side, st.offset, st.check, st.v
     w = scratch.seg_work
     kap, C, P, cs, ps, cq, pq, cache = w.kap, w.C, w.P, w.cs, w.ps, w.cq, w.pq, w.cache
     cursor, diag = scratch.cursor, scratch.diag
@@ -1034,12 +1033,10 @@ def settle(t, model, springs, fric, harm, record, yld, st, scratch):
                 check[j] = 0
                 floor_size = _difference_row(C, P, nf + j, f, cs, ps)
                 push = side[j] * deriv_at0(kap, cs, ps, 2)
-                rebound = v[nf + j] - v[f]
                 tol = _contact_tol(ud[j], bound(kap, cs, ps, 0, 0.0), floor_size)
-                if push > 0.0 and rebound * rebound < 2.0 * tol * push:
-                    # a rebound whose excursion v^2 / (2 a) cannot clear the contact tolerance
+                if rebound_too_slow(push, v[nf + j] - v[f], tol):
                     plastic_merge(j, building, units, mode, v, diag)
-                    mode[j] = MODE_STUCK
+                    hold(st, j)
                     offset[j] = side[j] * 0.5 * ud[j]
                     check[j] = 2
                     changed = True
@@ -1053,11 +1050,7 @@ def settle(t, model, springs, fric, harm, record, yld, st, scratch):
                 if stays(kap, cq, pq):
                     diag[D_STICKS] += 1.0
                 else:
-                    mode[j] = MODE_FREE
-                    escape[j] = side[j]
-                    if fric is not None:
-                        sigma[j] = -side[j]
-                        escape_v[j] = -1
+                    leave_wall(st, j, fric is not None)
                     changed = True
             elif check[j] == 2 and mode[j] == MODE_FLOOR:
                 check[j] = 0
@@ -1065,9 +1058,7 @@ def settle(t, model, springs, fric, harm, record, yld, st, scratch):
                     floor_row(kap, C, P, f, uload[j] * r0, uload[j] * r1, cq, pq)
                     slide = floor_decision(kap, cq, pq, fric[j])
                     if slide != 0:
-                        mode[j] = MODE_FREE
-                        sigma[j] = slide
-                        escape_v[j] = -1
+                        start_slide(st, j, slide)
                         changed = True
         if not changed:
             return
@@ -1084,16 +1075,8 @@ def _record_impacts(t, units, st, events, v_before, recs, diag):
     for j in range(hit.shape[0]):
         if hit[j] and irec < recs.shape[0]:
             f = ufloor[j]
-            recs[irec, R_T] = t
-            recs[irec, R_UNIT] = j
-            recs[irec, R_SIDE] = ev_side[j]
-            recs[irec, R_X] = q[f]
-            recs[irec, R_V0] = v_before[f]
-            recs[irec, R_W0] = v_before[nf + j]
-            recs[irec, R_V1] = v[f]
-            recs[irec, R_W1] = v[nf + j]
-            recs[irec, R_STUCK] = 1.0 if mode[j] == MODE_STUCK else 0.0
-            recs[irec, R_IMPULSE] = impulse[j]
+            record_impact(recs[irec], t, j, ev_side[j], q[f], v_before[f], v_before[nf + j], v[f], v[nf + j],
+                          mode[j] == MODE_STUCK, impulse[j])
             irec += 1
     diag[D_NREC] = irec
 
@@ -1102,8 +1085,7 @@ def _record_impacts(t, units, st, events, v_before, recs, diag):
 def resolve_events(tau_ev, building, units, fric, st, events, vstick, diag):
     """Apply every unit's event that falls at this instant (tau_ev into the segment); returns the number of impacts."""
     ufloor, um, ud = units.floor, units.mass, units.gap
-    mode, side, sigma, offset, escape, escape_v, check, q, v = (st.mode, st.side, st.sigma, st.offset, st.escape,
-                                                                st.escape_v, st.check, st.q, st.v)
+    mode, side, offset, check, q, v = st.mode, st.side, st.offset, st.check, st.q, st.v
     ev_t, ev_side, ev_kind, hit, impulse, touched, floors_done = events
     nf = building.mass.shape[0]
     nu = um.shape[0]
@@ -1121,21 +1103,15 @@ def resolve_events(tau_ev, building, units, fric, st, events, vstick, diag):
         half = 0.5 * ud[j]
         kind = ev_kind[j]
         if kind == EV_RELEASE:
-            mode[j] = MODE_FREE
             q[nf + j] = q[f] + side[j] * half
             v[nf + j] = v[f]
-            escape[j] = side[j]
-            if fric is not None:
-                sigma[j] = -side[j]
-                escape_v[j] = -1
+            leave_wall(st, j, fric is not None)
         elif kind == EV_FLOOR_EXIT:
             v[nf + j] = v[f]
-            mode[j] = MODE_FREE
-            sigma[j] = -ev_side[j]
-            escape_v[j] = -1
+            start_slide(st, j, -ev_side[j])
         elif kind == EV_SLIDE_STOP:
             v[nf + j] = v[f]
-            mode[j] = MODE_FLOOR
+            rest_on_floor(st, j)
             offset[j] = q[nf + j] - q[f]
             check[j] = 2
         elif kind == EV_WALL:
@@ -1153,7 +1129,7 @@ def resolve_events(tau_ev, building, units, fric, st, events, vstick, diag):
                 if abs(v[nf + j] - v[f]) < vstick:
                     touched[j] = True
                 else:
-                    escape[j] = sd
+                    rebound(st, j)
                     check[j] = 1
             else:
                 hit[j] = True
@@ -1167,11 +1143,9 @@ def resolve_events(tau_ev, building, units, fric, st, events, vstick, diag):
             # its wall moved away under another unit's impact; a separation too slow to resolve
             # is judged in settle like any slow rebound.  Released before any merge below, which
             # moves the units still resting on the floor with it
-            mode[j] = MODE_FREE
-            escape[j] = side[j]
+            rebound(st, j)
             check[j] = 1
-            if fric is not None:
-                sigma[j] = -side[j]
+            meet_wall(st, j, side[j], fric is not None)
     _land_on_walls(building, units, fric, st, events, vstick, diag)
     _follow_floor_jolts(nf, units, fric, st, events.floors_done)
     return n_hit
@@ -1182,24 +1156,22 @@ def _land_on_walls(building, units, fric, st, events, vstick, diag):
     """Every unit struck or touched at this instant rests on its wall (a rebound too slow to resolve merges it
     with its floor, which jolts the floor: floors_done) or leaves it."""
     ufloor, ud = units.floor, units.gap
-    mode, side, sigma, offset, escape, check, v = st.mode, st.side, st.sigma, st.offset, st.escape, st.check, st.v
+    mode, side, offset, check, v = st.mode, st.side, st.offset, st.check, st.v
     ev_side, hit, touched, floors_done = events.side, events.hit, events.touched, events.floors_done
     nf = building.mass.shape[0]
     for j in range(ufloor.shape[0]):
         if not (hit[j] or touched[j]):
             continue
         f = ufloor[j]
-        side[j] = ev_side[j]
-        if fric is not None:
-            sigma[j] = -side[j]
+        meet_wall(st, j, ev_side[j], fric is not None)
         if abs(v[nf + j] - v[f]) < vstick:
             plastic_merge(j, building, units, mode, v, diag)
             floors_done[f] = True
-            mode[j] = MODE_STUCK
+            hold(st, j)
             offset[j] = side[j] * 0.5 * ud[j]
             check[j] = 2
         else:
-            escape[j] = side[j]
+            rebound(st, j)
             check[j] = 1
 
 
@@ -1211,16 +1183,14 @@ def _follow_floor_jolts(nf, units, fric, st, jolted):
     unit's friction turns.  A unit leaving its wall after its own rebound keeps leaving, and friction opposes
     that rebound already."""
     ufloor = units.floor
-    mode, sigma, escape, escape_v, v = st.mode, st.sigma, st.escape, st.escape_v, st.v
+    mode, escape, v = st.mode, st.escape, st.v
     for j in range(ufloor.shape[0]):
         f = ufloor[j]
         if not jolted[f]:
             continue
         if mode[j] == MODE_FLOOR and v[nf + j] != v[f]:
             # friction cannot pass on an impulse: the floor slips under the unit
-            mode[j] = MODE_FREE
-            sigma[j] = 1 if v[nf + j] > v[f] else -1
-            escape_v[j] = 0
+            slip(st, j, v[nf + j] - v[f])
         elif mode[j] == MODE_FREE and escape[j] * (v[nf + j] - v[f]) > CONTACT_TOL * (abs(v[nf + j]) + abs(v[f])):
             # leaving a wall, and the floor's jolt drives it back into that wall: no longer leaving, so the
             # search finds the strike at once rather than after it has passed through the wall.  A drive within
@@ -1229,12 +1199,10 @@ def _follow_floor_jolts(nf, units, fric, st, jolted):
             # strike to each other without end (probe scene 3297466453-2244)
             escape[j] = 0
             if fric is not None and fric[j] > 0.0:
-                sigma[j] = 1 if v[nf + j] > v[f] else -1
-                escape_v[j] = 0
+                slide_with(st, j, v[nf + j] - v[f])
         elif mode[j] == MODE_FREE and fric is not None and v[nf + j] != v[f]:
             # a sliding unit's floor jumped under another unit's impact: friction now opposes the new slip
-            sigma[j] = 1 if v[nf + j] > v[f] else -1
-            escape_v[j] = 0
+            slide_with(st, j, v[nf + j] - v[f])
 
 
 @njit(cache=True)
@@ -1264,7 +1232,7 @@ def _workspace(nt, nfull, nu, nrows, nmax, slots, nmon):
 @njit(cache=True)
 def _initial_units(units, fric, st):
     """Contact state of every unit at the start: walls to check, friction's floor contact and slide sign."""
-    mode, sigma, offset, check, q, v = st.mode, st.sigma, st.offset, st.check, st.q, st.v
+    mode, offset, check, q, v = st.mode, st.offset, st.check, st.q, st.v
     ufloor, ud = units.floor, units.gap
     nf = q.shape[0] - ufloor.shape[0]
     for j in range(mode.shape[0]):
@@ -1279,7 +1247,7 @@ def _initial_units(units, fric, st):
                     mode[j] = MODE_FLOOR
                     check[j] = 2
                 else:
-                    sigma[j] = 1 if rel > 0.0 else -1
+                    slide_with(st, j, rel)
 
 
 @njit(cache=True, inline='always')
