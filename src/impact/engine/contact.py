@@ -301,17 +301,16 @@ def rest_on_floor(st, j):
 
 
 @njit(cache=True, inline='always')
-def record_impact(row, t, unit, side, x, v0, w0, v1, w1, stuck, impulse):
+def record_impact(row, t, unit, side, x, before, after, stuck, impulse):
     """One impact's record (layout.R_*): its time, unit and wall, the floor's place, the floor's and the unit's
-    velocities before and after, whether the unit stuck, and Newton's impulse (a plastic end is not in it)."""
+    velocities before and after (two pairs), whether the unit stuck, and Newton's impulse (a plastic end is not in
+    it)."""
     row[L.R_T] = t
     row[L.R_UNIT] = unit
     row[L.R_SIDE] = side
     row[L.R_X] = x
-    row[L.R_V0] = v0
-    row[L.R_W0] = w0
-    row[L.R_V1] = v1
-    row[L.R_W1] = w1
+    row[L.R_V0], row[L.R_W0] = before
+    row[L.R_V1], row[L.R_W1] = after
     row[L.R_STUCK] = 1.0 if stuck else 0.0
     row[L.R_IMPULSE] = impulse
 

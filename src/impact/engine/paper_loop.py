@@ -572,7 +572,8 @@ def _resolve_event(w, t, pid, fric, a_f, ev_kind, ev_side, irec):
     if irec < rec.shape[0]:
         # Newton's impulse alone, as solve_impulses gives it in the scene loop
         impulse = p[L.P_MU] * (1.0 + p[L.P_E]) * approach / (1.0 + p[L.P_MU])
-        contact.record_impact(rec[irec], t, 0.0, c.side[0], z[0], vm, wm, z[1], z[3], c.mode[0] == L.MODE_STUCK, impulse)
+        contact.record_impact(rec[irec], t, 0.0, c.side[0], z[0], (vm, wm), (z[1], z[3]), c.mode[0] == L.MODE_STUCK,
+                              impulse)
         irec += 1
     return irec
 

@@ -1075,7 +1075,7 @@ def _record_impacts(t, units, st, events, v_before, recs, diag):
     for j in range(hit.shape[0]):
         if hit[j] and irec < recs.shape[0]:
             f = ufloor[j]
-            record_impact(recs[irec], t, j, ev_side[j], q[f], v_before[f], v_before[nf + j], v[f], v[nf + j],
+            record_impact(recs[irec], t, j, ev_side[j], q[f], (v_before[f], v_before[nf + j]), (v[f], v[nf + j]),
                           mode[j] == MODE_STUCK, impulse[j])
             irec += 1
     diag[D_NREC] = irec
