@@ -25,8 +25,8 @@ follows from it, one state machine of a unit's contact:
   escape, escape_v: the scene loop's RunState, the paper loop's ContactState of
   its one unit): meet_wall, leave_wall, rebound, hold, start_slide,
   rest_on_floor, slip, slide_with;
-- an impact's record (record_impact) and the guard on a run's events
-  (event_cap_reached).
+- an impact's record (record_impact), a wall event's penetration
+  (note_penetration) and the guard on a run's events (event_cap_reached).
 """
 
 from __future__ import annotations
@@ -313,6 +313,19 @@ def record_impact(row, t, unit, side, x, before, after, stuck, impulse):
     row[L.R_V1], row[L.R_W1] = after
     row[L.R_STUCK] = 1.0 if stuck else 0.0
     row[L.R_IMPULSE] = impulse
+
+
+@njit(cache=True, inline='always')
+def note_penetration(diag, pen, roundoff):
+    """Keep a wall event's penetration pen (how far past its wall the unit is when the event is applied): the
+    deepest (layout.D_PEN), and the deepest beyond `roundoff`, the round-off of the positions it is read from
+    (layout.D_PEN_EXCESS).  An event is located on its gap row to that row's round-off, which an ill-conditioned
+    modal basis (a post-yield stiffness near zero beside pendulums) makes thousands of ulps of the motion: what
+    the location promises is the excess."""
+    if pen > diag[L.D_PEN]:
+        diag[L.D_PEN] = pen
+    if pen - roundoff > diag[L.D_PEN_EXCESS]:
+        diag[L.D_PEN_EXCESS] = pen - roundoff
 
 
 STALL_EVENTS, STALL_SPAN = 1000, 1e-9  # this many events within this fraction of a period: no progress

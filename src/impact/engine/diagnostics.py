@@ -56,9 +56,10 @@ def stop(diag) -> dict:
             "stop_unit": element if by and not storey else -1, "stop_storey": element + 1 if by and storey else -1}
 
 
-#: the energy balance's terms in a run's diagnostics (energy_balance), and the deepest penetration
+#: the energy balance's terms in a run's diagnostics (energy_balance), and the deepest penetration (with the part
+#: of it beyond the round-off of the positions it was read from, contact.note_penetration)
 ENERGY_TERMS = ("energy_residual", "work_input", "viscous_dissipation", "impact_losses", "friction_work",
-                "max_penetration")
+                "max_penetration", "penetration_beyond_roundoff")
 
 
 def read_diagnostics(diag) -> dict:
@@ -66,6 +67,7 @@ def read_diagnostics(diag) -> dict:
     out = {name: kind(diag[index]) for name, index, kind in _DIAGNOSTIC_FIELDS}
     out.update(stop(diag))
     out["max_penetration"] = float(max(diag[L.D_PEN], 0.0))
+    out["penetration_beyond_roundoff"] = float(max(diag[L.D_PEN_EXCESS], 0.0))
     out.update(energy_balance(diag[L.D_WORK], diag[L.D_VISC], diag[L.D_IMPLOSS], diag[L.D_FRICTION],
                               diag[L.D_E0], diag[L.D_E1], diag[L.D_EMAX], diag[L.D_PLASTIC]))
     return out

@@ -41,7 +41,9 @@ D_PLASTIC, D_YIELDS, D_COLLAPSE = 21, 22, 23
 # a run stopped early (D_CAP: STOP_CAP, STOP_STALL or STOP_BUDGET): the element whose event it stopped at (a unit's index, or
 # a storey's for a storey's event), that event's kind (EV_*) and its side (+1 / -1, 0 for none)
 D_STOP_ELEMENT, D_STOP_EVENT, D_STOP_SIDE = 24, 25, 26
-NDIAG = 27
+# the deepest penetration less the round-off of the positions it is read from (contact.note_penetration)
+D_PEN_EXCESS = 27
+NDIAG = 28
 # D_CAP: the cap on events per period, the stall guard (no progress), or the run's event budget
 STOP_CAP, STOP_STALL, STOP_BUDGET = 1, 2, 3
 

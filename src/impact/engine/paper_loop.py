@@ -549,9 +549,9 @@ def _resolve_event(w, t, pid, fric, a_f, ev_kind, ev_side, irec):
         z[3] = z[1]
         contact.leave_wall(c, 0, fric is not None)
         return irec
-    pen = abs(z[2] - z[0]) - half
-    if pen > diag[L.D_PEN]:
-        diag[L.D_PEN] = pen
+    # read off its own one-unit rows in model units, whose round-off is a few ulps of the motion: none is
+    # allowed for
+    contact.note_penetration(diag, abs(z[2] - z[0]) - half, 0.0)
     approach = ev_side * (z[3] - z[1])
     vm = z[1]
     wm = z[3]

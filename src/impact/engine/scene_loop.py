@@ -57,6 +57,7 @@ from impact.engine.contact import (
     hold,
     leave_wall,
     meet_wall,
+    note_penetration,
     plastic_end,
     rebound,
     rebound_too_slow,
@@ -84,7 +85,7 @@ from impact.engine.layout import (
     D_IMPLOSS,
     D_NREC,
     D_PEAK_GAVE_UP,
-    D_PEN,
+    D_PEN_EXCESS,
     D_PLASTIC,
     D_SEGMENTS,
     D_SIMULTANEOUS,
@@ -138,7 +139,7 @@ from impact.engine.modal import (
     monitor_row,
     square_integral,
 )
-from impact.engine.sampler import sample_segment
+from impact.engine.sampler import row_roundoff, sample_segment
 from impact.engine.segment import (
     SINGLE_COLUMNS,
     bound,
@@ -1082,8 +1083,16 @@ def _record_impacts(t, units, st, events, v_before, recs, diag):
 
 
 @njit(cache=True)
-def resolve_events(tau_ev, building, units, fric, st, events, vstick, diag):
-    """Apply every unit's event that falls at this instant (tau_ev into the segment); returns the number of impacts."""
+def _gap_roundoff(seg, row, f, tau):
+    """The round-off of a unit's gap (its row less its floor's f) at tau into the segment seg was built for (its ek
+    is exp(kap tau) there), as sample_segment counts a position's: the event search found the wall on these rows."""
+    return row_roundoff(seg.ek, seg.C, seg.P, row, tau) + row_roundoff(seg.ek, seg.C, seg.P, f, tau)
+
+
+@njit(cache=True)
+def resolve_events(tau_ev, building, units, fric, st, events, vstick, seg, diag):
+    """Apply every unit's event that falls at this instant (tau_ev into the segment, seg's: bundles.SegmentWork);
+    returns the number of impacts."""
     ufloor, um, ud = units.floor, units.mass, units.gap
     mode, side, offset, check, q, v = st.mode, st.side, st.offset, st.check, st.q, st.v
     ev_t, ev_side, ev_kind, hit, impulse, touched, floors_done = events
@@ -1117,8 +1126,8 @@ def resolve_events(tau_ev, building, units, fric, st, events, vstick, diag):
         elif kind == EV_WALL:
             sd = ev_side[j]
             pen = abs(q[nf + j] - q[f]) - half
-            if pen > diag[D_PEN]:
-                diag[D_PEN] = pen
+            if pen > diag[D_PEN_EXCESS]:
+                note_penetration(diag, pen, _gap_roundoff(seg, nf + j, f, tau_ev))
             if sd * (v[nf + j] - v[f]) <= 0.0:
                 # touched within contact tolerance while already separating: at a speed below the sticking
                 # one it is resting there (merged below, and the walls decide); else settle judges it as a
@@ -1326,7 +1335,8 @@ def handle_events(t, tau, model, springs, fric, harm, record, yld, st, scratch):
     v, v_before = st.v, scratch.v_before
     for i in range(v.shape[0]):
         v_before[i] = v[i]
-    n_hit = resolve_events(tau, model.building, model.units, fric, st, scratch.events, p[P_VSTICK], diag)
+    n_hit = resolve_events(tau, model.building, model.units, fric, st, scratch.events, p[P_VSTICK], scratch.seg_work,
+                           diag)
     if yld is not None:
         resolve_storeys(tau, yld, scratch.events, model.units.mass.shape[0], st.q, st.v, diag)
         storey_jumps(yld, st.q, st.v, diag, n_hit > 0)  # an impact, or a resting unit's merge, moved a floor
