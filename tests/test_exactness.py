@@ -573,8 +573,8 @@ HELD_AT_SCALE = {
     (868342599, 2854): "sample above a certified peak",
     (1793649315, 1759): "sample above a certified peak",
     (1241593810, 438): "sample above a certified peak",
-    # the soft-mode class at the walls: ten yielding storeys (the softest keeping 8e-4 of its stiffness) under a
-    # force record, a PID of three units in a 0.18 mm gap among pendulums and a CID in gaps of 0.2 um.  Each wall
+    # the soft-mode class at the walls: ten yielding storeys (post-yield stiffness down to 8e-4 k) under a force
+    # record, a PID of three units in a 0.18 mm gap beside a PID and a CID in gaps of 0.25 and 0.16 um.  Each wall
     # event is found on the unit's gap row, whose floor part is written with terms far larger than the motion
     # (the positions' stated round-off is 1.6e-11 m); the state it is applied to is advanced from itself, and the
     # unit was read 6.0e-12 m past its wall, 1.05e-9 of the motion's scale.  Under other kernel sets the same
