@@ -703,11 +703,14 @@ def test_a_wall_event_is_located_to_the_round_off_of_the_rows_it_is_found_on():
     penetration_beyond_roundoff) and at its samples (q_roundoff, the same count): beyond that, by less than 1e-9
     of the motion's scale.  The paper loop counts no round-off (its one unit's rows are in model units, of the
     motion's size): there the two are the same number, within 1e-9 of the gap."""
-    from probe import SAMPLES, scene_of
+    from probe import SAMPLES, scene_of, smallest_tangent
 
     scene, scale = scene_of(1498198309, 1024)
     result = simulate(scene, measures=("peaks", "samples"), times=np.linspace(0.0, scene.t_end, SAMPLES))
     diag = result.diagnostics
+    # the scene as docs/model.md describes it: its softest post-yield stiffness, its PID's gap, its rows' round-off
+    assert f"{smallest_tangent(scene):.0e}" == "8e-04" and f"{scene.dampers[1].gap * 1e3:.2f}" == "0.18"
+    assert f"{np.max(result.samples['q_roundoff']):.1e}" == "1.6e-11"
     stated = diag["max_penetration"] - diag["penetration_beyond_roundoff"]
     assert 0.0 <= diag["penetration_beyond_roundoff"] <= 1e-9 * scale
     assert diag["max_penetration"] > 0.0 and 0.0 <= stated <= 2.0 * np.max(result.samples["q_roundoff"])
@@ -715,6 +718,21 @@ def test_a_wall_event_is_located_to_the_round_off_of_the_rows_it_is_found_on():
     paper = simulate_system(system, 1.0, Protocol(periods=60.0, average_from=30.0, start="left"))
     assert paper.diagnostics["impacts"] > 0
     assert paper.diagnostics["max_penetration"] == paper.diagnostics["penetration_beyond_roundoff"] <= 1e-9 * system.gap
+
+
+def test_a_row_searched_before_the_one_whose_event_ends_the_segment_is_searched_to_its_end():
+    """Probe scene 1498198309-253 without its nanometre PID (docs/performance.md, "Where the event search outweighs
+    the rest"): nine stiff pendulums swinging close to their walls, each row searched to the segment's end, cost
+    about 460 search steps a segment over 239 segments; the building without them, its storeys' rows alone (and
+    its TMDs', which have no walls), about 29 (measured), so the pendulums take over nine tenths of the search."""
+    from probe import scene_of
+
+    scene, _ = scene_of(1498198309, 253)
+    assert [d.kind for d in scene.dampers] == ["tmd", "pid", "pid", "tmd"] and scene.dampers[2].gap < 1e-9
+    diag = simulate(replace(scene, dampers=scene.dampers[:2] + scene.dampers[3:]), measures=("peaks",)).diagnostics
+    assert diag["segments"] == 239 and f"{diag['search_steps'] / diag['segments']:.0f}" == "460"
+    bare = simulate(replace(scene, dampers=()), measures=("peaks",)).diagnostics
+    assert diag["search_steps"] / diag["segments"] > 10.0 * bare["search_steps"] / bare["segments"]
 
 
 def test_floor_one_between_two_plastic_storeys_moves_as_an_independent_solution_says():

@@ -4,8 +4,8 @@ reproduce each break.
 The scenes and the promises are the test suite's probe (``tests/probe.py``: uniform or uneven buildings, any gap
 and restitution, friction, harmonic, recorded, Kanai-Tajimi and wind loads; finished, finite, energy balanced, no
 unit through its wall beyond what its position is known to, no dense sample above a certified peak), drawn wider
-(probe.WIDE: up to 10 storeys, 4 dampers of up to 12 units, where the suite's stop at 4, 3 and 6), and a share of them on buildings that yield
-(probe.draw_yielding_scene: perfectly plastic or hardening storeys, with and without P-delta and a collapse limit).  The suite runs 300 fixed scenes in a minute; this script
+(probe.WIDE: up to 10 storeys, 4 dampers of up to 12 units, where the suite's stop at 4, 3 and 6), and a share of
+them on buildings that yield (probe.draw_yielding_scene: perfectly plastic or hardening storeys, with and without P-delta and a collapse limit).  The suite runs 300 fixed scenes in a minute; this script
 runs as many as asked, in worker processes with a time bound per scene, with a new seed unless one is given, so
 that it keeps finding what the fixed 300 cannot.
 
