@@ -730,7 +730,8 @@ def test_a_row_searched_before_the_one_whose_event_ends_the_segment_is_searched_
     scene, _ = scene_of(1498198309, 253)
     assert [d.kind for d in scene.dampers] == ["tmd", "pid", "pid", "tmd"] and scene.dampers[2].gap < 1e-9
     diag = simulate(replace(scene, dampers=scene.dampers[:2] + scene.dampers[3:]), measures=("peaks",)).diagnostics
-    assert diag["segments"] == 239 and f"{diag['search_steps'] / diag['segments']:.0f}" == "460"
+    # counts, not values: another machine's round-off (issue 39's lesson) may move a step or a grazing touch
+    assert abs(diag["segments"] - 239) <= 2 and diag["search_steps"] / diag["segments"] == pytest.approx(460, rel=0.05)
     bare = simulate(replace(scene, dampers=()), measures=("peaks",)).diagnostics
     assert diag["search_steps"] / diag["segments"] > 10.0 * bare["search_steps"] / bare["segments"]
 
