@@ -576,7 +576,7 @@ HELD_AT_SCALE = {
     # the soft-mode class at the walls: ten yielding storeys (post-yield stiffness down to 8e-4 k) under a force
     # record, a PID of three units in a 0.18 mm gap beside a PID and a CID in gaps of 0.25 and 0.16 um.  Each wall
     # event is found on the unit's gap row, whose floor part is written with terms far larger than the motion
-    # (the positions' stated round-off is 1.6e-11 m); the state it is applied to is advanced from itself, and the
+    # (the positions' stated round-off is 1.6e-11 m); the state it was applied to was advanced from itself, and the
     # unit was read 6.0e-12 m past its wall, 1.05e-9 of the motion's scale.  Under other kernel sets the same
     # event reads 2.7e-16 m (SandyBridge) and 1.8e-11 m (Prescott): round-off.  A penetration is now promised
     # beyond the round-off of the positions it is read from (contact.note_penetration), as a sample is against a

@@ -24,7 +24,10 @@ P_OMEGA, P_PHI, P_F0 = 6, 7, 8          # harmonic load F0 sin(Omega t + phi)
 P_REC_T0, P_REC_DT = 9, 10              # record load: first sample time and step
 P_WINDOW = 11  # the scene loop: 1.0 integrates the roof's square over the window (amplitude, RMS), 0.0 not (unread)
 P_MAXEV_RUN = 12  # the run's event budget, its events in all (inf: none but the cap per period)
-NPAR = 13
+# the scene loop: 1.0 advances the state from itself on every segment, not only while a storey yields (a storey whose
+# stability coefficient passes model.scene.MAX_STABILITY, in a scene the model refuses: segment.flow_change)
+P_FROM_ITSELF = 13
+NPAR = 14
 # the paper loop's system, model units (M = 1, omega_n = 1): mass ratio, damping ratio, restitution, gap,
 # the pendulum's tuning wp (0 for the CID)
 P_MU, P_BETA, P_E, P_GAP, P_WP = range(NPAR, NPAR + 5)

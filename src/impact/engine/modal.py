@@ -278,8 +278,9 @@ def integrate_modal(w, s, n, tau, units, record, r0, r1, from_state):
     segment's start; cu1: scratch of the reduced size; wt: the segment's mode weights (mode_weights), which halve
     the sums over k; single, ramp: integral_tables and ramp_tables over tau; pu: (2, NPOLY) scratch; all of them
     fields of w (bundles.SegmentWork).  from_state: the load's work in the ramp form too, from the state's
-    velocities (a yielding building's, whose state is advanced from itself: segment.flow_change); an elastic
-    building's is taken term by term, as it always was, so that its numbers stay what they were.
+    velocities (a yielding building's, whose state is advanced from itself while a storey yields:
+    segment.flow_change); an elastic building's is taken term by term, as it always was, so that its numbers stay
+    what they were.
     """
     cu1, wt, mode, load_vec, P, pu, diag = w.cu1, w.wt, w.mode, w.load_vec, w.P, w.pu, w.diag
     ramp, single, gvis, lmod, lam, vec, cred = w.ramp, w.single, w.gvis, w.lmod, w.lam, w.vec, w.damping

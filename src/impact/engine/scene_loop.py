@@ -113,6 +113,7 @@ from impact.engine.layout import (
     MODE_STUCK,
     NDIAG,
     NPOLY,
+    P_FROM_ITSELF,
     P_OMEGA,
     P_PERIOD,
     P_PHI,
@@ -1126,7 +1127,7 @@ def resolve_events(tau_ev, building, units, fric, st, events, vstick, seg, diag)
         elif kind == EV_WALL:
             sd = ev_side[j]
             pen = abs(q[nf + j] - q[f]) - half
-            if pen > diag[D_PEN_EXCESS]:
+            if pen > diag[D_PEN_EXCESS]:  # else it raises neither record (D_PEN >= D_PEN_EXCESS): no round-off count
                 note_penetration(diag, pen, _gap_roundoff(seg, nf + j, f, tau_ev))
             if sd * (v[nf + j] - v[f]) <= 0.0:
                 # touched within contact tolerance while already separating: at a speed below the sticking
@@ -1290,13 +1291,15 @@ def integrate_energy(w, s, tau, building, units, springs, harm, record, load_at,
 
 
 @njit(cache=True, inline='always')
-def move_to_end(w, building, units, springs, fric, yld, tau, s, wave):
+def move_to_end(w, building, units, springs, fric, yld, tau, s, wave, from_itself):
     """The state at the segment's end, the friction and plastic work on the way, and the largest stored energy.
 
-    A yielding building's state is advanced mode by mode from itself (segment.flow_change), not read off the rows,
-    whose parts beside a post-yield stiffness near zero are far larger than the motion; an elastic building's
-    from the rows, as it always was.  s: the segment's configuration slot; wave: (harmonic, theta0, omega), whether
-    the load is harmonic, its phase at the segment's start and its frequency."""
+    from_itself: the state is advanced mode by mode from itself (segment.flow_change), not read off the rows, whose
+    parts beside a stiffness near zero are far larger than the motion: while a storey yields (its post-yield
+    stiffness), and on every segment of a scene past the model's stability bound (layout.P_FROM_ITSELF).  With
+    every storey elastic within the bound it is read off the rows, as an elastic building's always was
+    (docs/model.md, "Near zero the flow loses digits").  s: the segment's configuration slot; wave: (harmonic,
+    theta0, omega), whether the load is harmonic, its phase at the segment's start and its frequency."""
     harmonic, theta0, omega = wave
     mode, sigma, kap, ek, C, P, q, v = w.mode, w.sigma, w.kap, w.ek, w.C, w.P, w.q, w.v
     s_before, diag = w.s_before, w.diag
@@ -1305,7 +1308,7 @@ def move_to_end(w, building, units, springs, fric, yld, tau, s, wave):
     if fric is not None:
         for j in range(mode.shape[0]):
             s_before[j] = q[nf + j] - q[ufloor[j]]
-    if yld is not None:
+    if from_itself:
         flow_change(w, s, tau, harmonic, theta0)
         take_flow_state(w, s, tau, harmonic, theta0, omega, units, nf)
     else:
@@ -1478,6 +1481,7 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
     tab_tau = -1.0
     s = 0
     rate = 0.0  # the configuration's growth rate (growth_rate), 0 unless a storey's P-delta outweighs it
+    always_from_itself = yld is not None and p[P_FROM_ITSELF] != 0.0  # else only while a storey yields
     omega = p[P_OMEGA]
     while t < t_end:
         r0, r1, theta0, t_next, tau_max = segment_load(p, record, harm, t, t_end)
@@ -1521,9 +1525,11 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
             # the ramp form's tables of any other step than a whole sample step (step_tables keeps those), made
             # once the step is known; a harmonic load's rows have no ramp and integrate term by term
             ramp_tables(kap, ek, tau, ramp, single)
-        if yld is not None and (record is None or tau != p[P_REC_DT]):
+        on_branch = key >> nu != 0  # a storey yielding
+        from_itself = on_branch or always_from_itself
+        if from_itself and (record is None or tau != p[P_REC_DT]):
             flow_tables(kap, ek, tau, single)  # a whole sample step's come with step_tables
-        if yld is None or key >> nu == 0:
+        if not on_branch:
             integrate_energy(w, s, tau, building, units, springs, harm, record, (theta0, r0, r1), yld is not None)
         else:
             # a storey yielding: the rows integrate.  A zero mode's particular velocity is not constant, which the
@@ -1533,7 +1539,7 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
         monitor_modal(w, s, n, tau, t, t_square, monitors, (r0, r1), harm is not None, yld is not None)
         if its < ts.shape[0]:
             its = sample_segment(kap, C, P, t, tau, ts, its, samples, qs, vs)
-        move_to_end(w, building, units, springs, fric, yld, tau, s, (harm is not None, theta0, omega))
+        move_to_end(w, building, units, springs, fric, yld, tau, s, (harm is not None, theta0, omega), from_itself)
         t = t_next if not event else t + tau
         for j in range(nu):
             if escape[j] != 0 and not _still_leaving(j, nf, units, mode, escape, q, v):

@@ -34,7 +34,7 @@ from impact.engine.scene_loop import run_scene
 from impact.model.building import Building
 from impact.model.kinds import KINDS
 from impact.model.params import ParameterError
-from impact.model.scene import Contact, Damper, ForceRecord, GroundMotion, Harmonic, Scene, State
+from impact.model.scene import MAX_STABILITY, Contact, Damper, ForceRecord, GroundMotion, Harmonic, Scene, State
 
 CACHE_SLOTS = 16        # configurations whose eigen-data are kept at once
 
@@ -330,6 +330,7 @@ def _scene_arrays(scene: Scene, peaks=PEAK_GROUPS, window: bool = True):
     p[L.P_WINDOW] = 1.0 if window else 0.0
     p[L.P_MAXEV] = scene.max_events_per_period
     p[L.P_MAXEV_RUN] = scene.event_budget
+    p[L.P_FROM_ITSELF] = float(not b.is_elastic and np.max(scene.stability_coefficients()) > MAX_STABILITY)
     p[L.P_PERIOD] = 2.0 * math.pi / omega1
     if harm is not None:
         p[L.P_OMEGA] = scene.load.omega
