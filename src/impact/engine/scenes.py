@@ -330,7 +330,9 @@ def _scene_arrays(scene: Scene, peaks=PEAK_GROUPS, window: bool = True):
     p[L.P_WINDOW] = 1.0 if window else 0.0
     p[L.P_MAXEV] = scene.max_events_per_period
     p[L.P_MAXEV_RUN] = scene.event_budget
-    p[L.P_FROM_ITSELF] = float(not b.is_elastic and np.max(scene.stability_coefficients()) > MAX_STABILITY)
+    yld = _yield_arrays(scene)
+    # theta = P / (k h) past the model's bound, read off the storey table (its geometric stiffness is P / h)
+    p[L.P_FROM_ITSELF] = float(yld is not None and np.any(yld.geometric > MAX_STABILITY * yld.stiffness))
     p[L.P_PERIOD] = 2.0 * math.pi / omega1
     if harm is not None:
         p[L.P_OMEGA] = scene.load.omega
@@ -347,7 +349,7 @@ def _scene_arrays(scene: Scene, peaks=PEAK_GROUPS, window: bool = True):
     p[L.P_REC_T0] = 0.0
     p[L.P_REC_DT] = rec_dt
     return dict(model=SceneArrays(p, building, units, load_vec, monitors), springs=springs, fric=fric, harm=harm,
-                record=record, yld=_yield_arrays(scene), start=StartState(q0, v0, mode0, side0),
+                record=record, yld=yld, start=StartState(q0, v0, mode0, side0),
                 cache=_cache(nf + n_spring))
 
 
