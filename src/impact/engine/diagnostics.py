@@ -35,6 +35,7 @@ _DIAGNOSTIC_FIELDS = (
     ("grazing_events", L.D_GRAZE, int),
     ("time_in_contact", L.D_STUCKTIME, float),
     ("segments", L.D_SEGMENTS, int),
+    ("clear_steps", L.D_CLEAR, int),
     ("search_steps", L.D_STEPS, int),
     ("event_cap_reached", L.D_CAP, bool),
     ("uncertified_peak_segments", L.D_PEAK_GAVE_UP, int),

@@ -46,7 +46,8 @@ D_PLASTIC, D_YIELDS, D_COLLAPSE = 21, 22, 23
 D_STOP_ELEMENT, D_STOP_EVENT, D_STOP_SIDE = 24, 25, 26
 # the deepest penetration less the round-off of the positions it is read from (contact.note_penetration)
 D_PEN_EXCESS = 27
-NDIAG = 28
+D_CLEAR = 28  # segments taken as a whole record step by matrices (clear_step)
+NDIAG = 29
 # D_CAP: the cap on events per period, the stall guard (no progress), or the run's event budget
 STOP_CAP, STOP_STALL, STOP_BUDGET = 1, 2, 3
 

@@ -48,6 +48,7 @@ from impact.engine.bundles import (
     YieldArrays,
     borrowed,
 )
+from impact.engine.clear_step import clear_steps
 from impact.engine.contact import (
     CONTACT_TOL,
     event_cap_reached,
@@ -118,7 +119,6 @@ from impact.engine.layout import (
     P_PERIOD,
     P_PHI,
     P_REC_DT,
-    P_REC_T0,
     P_T0,
     P_TEND,
     P_TWIN,
@@ -158,41 +158,17 @@ from impact.engine.segment import (
     kappa_powers,
     poly_at,
     ramp_tables,
+    record_value,
     same_unit,
     scene_key,
     state_from_exp,
     storey_drift,
     storey_gravity,
     take_flow_state,
+    whole_step,
 )
 
 _ROUND_TOL = 1e-13  # 450 eps: the round-off of a difference of rows, relative to their terms' size
-
-
-@njit(cache=True, inline='always')
-def record_value(record, p, t):
-    """(r0, r1, t_next): the record's value and slope at t, and its next sample time."""
-    t0 = p[P_REC_T0]
-    dt = p[P_REC_DT]
-    n = record.shape[0]
-    x = (t - t0) / dt
-    i = int(math.floor(x))
-    if i < 0:
-        return 0.0, 0.0, t0
-    if i >= n - 1:
-        return 0.0, 0.0, np.inf
-    t_i = t0 + i * dt
-    t_next = t0 + (i + 1) * dt
-    if t_next <= t:  # t sits on a sample within round-off
-        i += 1
-        if i >= n - 1:
-            return 0.0, 0.0, np.inf
-        t_i = t_next
-        t_next = t0 + (i + 1) * dt
-    slope = (record[i + 1] - record[i]) / dt
-    if t == t_i:
-        return record[i], slope, t_next
-    return record[i] + slope * (t - t_i), slope, t_next
 
 
 @njit(cache=True, inline='always')
@@ -249,6 +225,15 @@ def _still_leaving(j, nf, units, mode, escape, q, v):
     # to the contact tolerance of the gap and of the positions it is the difference of
     on_wall = abs(q[nf + j] - q[f] - escape[j] * half) <= CONTACT_TOL * (units.gap[j] + abs(q[nf + j]) + abs(q[f]))
     return on_wall and escape[j] * (v[nf + j] - v[f]) <= 0.0
+
+
+@njit(cache=True, inline='always')
+def _all_free(mode, escape):
+    """Every unit free and none leaving a wall: the configuration clear_step's tables are made for."""
+    for j in range(mode.shape[0]):
+        if mode[j] != MODE_FREE or escape[j] != 0:
+            return False
+    return True
 
 
 @njit(cache=True, inline='always')
@@ -1273,10 +1258,8 @@ def segment_load(p, record, harm, t, t_end):
     if harm is not None:
         theta0 = p[P_OMEGA] * t + p[P_PHI]
     tau_max = t_next - t
-    if record is not None and t_next < t_end and abs(tau_max - p[P_REC_DT]) <= 1e-9 * p[P_REC_DT]:
-        # a whole sample step: its length is the record's dt, not the difference of two rounded times,
-        # so every such step shares one set of integral tables
-        tau_max = p[P_REC_DT]
+    if record is not None:
+        tau_max = whole_step(p, t, t_next, t_end)
     return r0, r1, theta0, t_next, tau_max
 
 
@@ -1435,14 +1418,15 @@ def _segment_work(ws, st, out, cache, load_vec):
 
 
 @njit(cache=True)
-def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
+def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out):
     """One run from p[P_T0] to p[P_TEND], its results written into out (bundles.RunOutputs); returns the number
     of impact records written.
 
     model: bundles.SceneArrays; start: bundles.StartState, with every unit's initial contact state (the
     walls decide at once whether they hold a unit placed against them); cache: a bundles.ConfigCache
     that the run fills; yld: a yielding building's bundles.YieldArrays (None for an elastic one), whose state
-    the run advances from where it is and leaves as its result.
+    the run advances from where it is and leaves as its result; clear: a bundles.ClearStep for a scene whose whole
+    record steps may be taken by matrices (clear_step; None: every step by the segment's rows).
     """
     model = borrowed_model(model)
     p, building, units, load_vec, monitors = model
@@ -1483,7 +1467,14 @@ def run_scene(model, springs, fric, harm, record, yld, start, cache, out):
     rate = 0.0  # the configuration's growth rate (growth_rate), 0 unless a storey's P-delta outweighs it
     always_from_itself = yld is not None and p[P_FROM_ITSELF] != 0.0  # else only while a storey yields
     omega = p[P_OMEGA]
+    if clear is not None:
+        n2 = 2 * (nf + nu)
+        nmon = monitors.kind.shape[0]
+        clear_scratch = (np.empty(n2 + 2), np.empty(n2), np.empty(n2), np.empty(nmon), np.empty(nmon))
     while t < t_end:
+        if clear is not None and _all_free(mode, escape):
+            t = clear_steps(clear, clear_scratch, (q, v, diag), (out.peak, out.peak_t, monitors.cap, out.x2), p, record,
+                            (t, t_end, t_square, ts[its] if its < ts.shape[0] else np.inf), building, units, springs)
         r0, r1, theta0, t_next, tau_max = segment_load(p, record, harm, t, t_end)
         key = scene_key(mode, yld)
         if key != slot_key:

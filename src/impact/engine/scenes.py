@@ -27,6 +27,7 @@ from impact.engine.bundles import (
     UnitArrays,
     YieldArrays,
 )
+from impact.engine.clear_step import clear_step_tables
 from impact.engine.contact import STICK_VELOCITY, free_vibration_stick
 from impact.engine.diagnostics import read_diagnostics
 from impact.engine.jitcache import compile_lock
@@ -348,8 +349,13 @@ def _scene_arrays(scene: Scene, peaks=PEAK_GROUPS, window: bool = True):
         p[L.P_VSTICK] = STICK_VELOCITY * scale / (float(np.sum(mass_full)) * omega1)
     p[L.P_REC_T0] = 0.0
     p[L.P_REC_DT] = rec_dt
+    clear = None
+    if record is not None and fric is None and yld is None and not np.any((k == 0.0) & (c != 0.0)):
+        # an elastic building whose units, free, fly or swing linearly: whole record steps by matrices where clear
+        # (a unit with a dashpot and no spring would neither fly freely nor have a mode of its own)
+        clear = clear_step_tables(building, units, springs, load_vec, rec_dt, monitors)
     return dict(model=SceneArrays(p, building, units, load_vec, monitors), springs=springs, fric=fric, harm=harm,
-                record=record, yld=yld, start=StartState(q0, v0, mode0, side0),
+                record=record, yld=yld, clear=clear, start=StartState(q0, v0, mode0, side0),
                 cache=_cache(nf + n_spring))
 
 
@@ -366,7 +372,7 @@ def run_arrays(arrays: dict, record: int = 0, times=None):
     a = arrays
     cache = ConfigCache(*(c.copy() for c in a["cache"]))
     yld = YieldArrays(*(x.copy() for x in a["yld"])) if a["yld"] is not None else None
-    run_scene(a["model"], a["springs"], a["fric"], a["harm"], a["record"], yld, a["start"], cache, out)
+    run_scene(a["model"], a["springs"], a["fric"], a["harm"], a["record"], yld, a["clear"], a["start"], cache, out)
     result = out._asdict()
     result["yld"] = yld
     return result
@@ -397,7 +403,7 @@ _WARM: set = set()  # the loops' specialisations compiled (or loaded) in this pr
 
 #: the optional parts of a scene, each compiled into its own specialisation of the loop when present
 OPTIONAL_PARTS = {"springs": "pendulums or TMDs", "fric": "friction", "harm": "a harmonic load",
-                  "record": "a load record", "yld": "yielding storeys"}
+                  "record": "a load record", "yld": "yielding storeys", "clear": "whole record steps by matrices"}
 
 
 def _signature_key(arrays: dict) -> tuple:

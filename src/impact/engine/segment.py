@@ -16,10 +16,12 @@ q_p = K^-1 (g0 - C K^-1 g1) + K^-1 g1 tau.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
-from impact.engine.layout import BRANCH_ELASTIC, MODE_FREE, NPOLY, UNIT_SPRING
+from impact.engine.layout import BRANCH_ELASTIC, MODE_FREE, NPOLY, P_REC_DT, P_REC_T0, UNIT_SPRING
 
 _SERIES = 0.5  # |z T| below which the integrals use their power series
 # _phi0's series: below 0.05 its closed form loses more than eps / 0.05 = 4e-15 (relative) to cancellation,
@@ -36,8 +38,51 @@ FLOW_PHI0, FLOW_PHI2 = 2 * NPOLY, 2 * NPOLY + 1
 
 
 # ----------------------------------------------------------------------------
+# a load record between its samples
+# ----------------------------------------------------------------------------
+
+@njit(cache=True, inline='always')
+def record_value(record, p, t):
+    """(r0, r1, t_next): the record's value and slope at t, and its next sample time."""
+    t0 = p[P_REC_T0]
+    dt = p[P_REC_DT]
+    n = record.shape[0]
+    x = (t - t0) / dt
+    i = int(math.floor(x))
+    if i < 0:
+        return 0.0, 0.0, t0
+    if i >= n - 1:
+        return 0.0, 0.0, np.inf
+    t_i = t0 + i * dt
+    t_next = t0 + (i + 1) * dt
+    if t_next <= t:  # t sits on a sample within round-off
+        i += 1
+        if i >= n - 1:
+            return 0.0, 0.0, np.inf
+        t_i = t_next
+        t_next = t0 + (i + 1) * dt
+    slope = (record[i + 1] - record[i]) / dt
+    if t == t_i:
+        return record[i], slope, t_next
+    return record[i] + slope * (t - t_i), slope, t_next
+
+
+@njit(cache=True, inline='always')
+def whole_step(p, t, t_next, t_end):
+    """The length of the record's step from t to t_next: the record's dt where the step is a whole sample step
+    (not the difference of two rounded times, so that every such step shares one set of tables), else the
+    difference."""
+    tau = t_next - t
+    if t_next < t_end and abs(tau - p[P_REC_DT]) <= 1e-9 * p[P_REC_DT]:
+        return p[P_REC_DT]
+    return tau
+
+
+# ----------------------------------------------------------------------------
 # evaluation of one coefficient-form row
 # ----------------------------------------------------------------------------
+
+
 
 @njit(cache=True, inline='always')
 def poly_at(p, tau):
