@@ -43,14 +43,14 @@ SpringArrays = namedtuple("SpringArrays", "stiffness damping")
 YieldArrays = namedtuple("YieldArrays", "stiffness hardening yield_drift geometric limit branch offset escape escape_v "
                                         "plastic yields")
 
-#: a whole record step by matrices (clear_step.clear_step_tables), every unit free: the state's flow over
-#: (q, q', f(0), f'), the quadratic forms of the load's work, the viscous dissipation and the roof's square over the
-#: step, the ramp's particular motion at the step's start; per monitor its row, the row bounding its second
-#: derivative and the load's part of that bound, and the same three of its slope; the same for each walled unit's
-#: gap row, its half gap and the degrees of freedom of its unit and its floor; and each degree of freedom's twin
-#: (the same unit before it, or -1)
+#: a whole record step by matrices (clear_step.clear_step_tables), every unit free and every storey elastic: the
+#: state's flow over (q, q', f(0), f', p), the quadratic forms of the load's work, the viscous dissipation and the
+#: roof's square over the step, the particular motion at the step's start; per monitor its row, the row bounding
+#: its second derivative and the load's part of that bound, and the same three of its slope; the same three for
+#: each band row (each walled unit's gap, then each storey's drift), each walled unit's half gap; and each degree of
+#: freedom's twin (the same unit before it, or -1)
 ClearStep = namedtuple("ClearStep", "flow work visc square part ends bound load_bound slope_ends slope_bound "
-                                    "slope_load wall_ends wall_bound wall_load half wall_unit wall_floor twin")
+                                    "slope_load band_ends band_bound band_load half twin")
 
 #: what the run certifies peaks of: rows over the degrees of freedom, kind (layout.MON_*),
 #: the record's coefficient (an absolute acceleration) and a cap the peak cannot pass

@@ -29,7 +29,7 @@ from scipy.linalg import expm
 from impact.engine.bundles import ClearStep
 from impact.engine.events import PEAK_RTOL
 from impact.engine.layout import D_CLEAR, D_EMAX, D_SEGMENTS, D_VISC, D_WORK, MON_DISP, P_REC_DT, UNIT_WALLS
-from impact.engine.segment import energy, record_value, whole_step
+from impact.engine.segment import energy, record_value, storey_gravity, whole_step
 
 #: how far inside its walls a unit's gap row must stay over a clear step, relative to the gap and the positions
 #: it is the difference of: a thousand times the contact tolerance the wall search resolves to (contact.CONTACT_TOL)
@@ -41,54 +41,86 @@ _MADE: dict = {}
 _MADE_MAX = 64
 
 
-def clear_step_tables(building, units, springs, load_vec: np.ndarray, dt: float, monitors) -> ClearStep:
-    """The tables of a whole record step of the scene with every unit free, M q'' + C q' + K q = load_vec f(t)
-    with f a ramp over [0, dt], for the state u = (q, q', f(0), f'); building, units, springs, monitors: the
-    scene's bundles (bundles.BuildingArrays, UnitArrays, SpringArrays or None, MonitorArrays, whose first row is
-    the roof's displacement, the one the window squares).  Made once per set of inputs (a run only reads them)."""
-    inputs = (*building, *units, *(springs or ()), load_vec, monitors.rows, monitors.kind, monitors.record_coef)
-    key = (dt, springs is None, *(a.tobytes() for a in inputs))
+def clear_step_tables(building, units, springs, yld, load_vec: np.ndarray, dt: float, monitors) -> ClearStep | None:
+    """The tables of a whole record step of the scene with every unit free and every storey elastic,
+    M q'' + C q' + K q = load_vec f(t) + G p with f a ramp over [0, dt] and p the storeys' plastic offsets, for the
+    state u = (q, q', f(0), f', p); building, units, springs, yld, monitors: the scene's bundles
+    (bundles.BuildingArrays, UnitArrays, SpringArrays or None, YieldArrays or None, MonitorArrays, whose first row
+    is the roof's displacement, the one the window squares).  None where no step can be taken so: a unit with a
+    dashpot and no spring (its flight is not the load's alone) or storeys whose elastic branches, with P-delta,
+    are not stable.  Made once per set of inputs (a run only reads them)."""
+    law = () if yld is None else (yld.stiffness, yld.hardening, yld.yield_drift, yld.geometric, yld.limit)
+    inputs = (*building, *units, *(springs or ()), *law, load_vec, monitors.rows, monitors.kind, monitors.record_coef)
+    key = (dt, springs is None, yld is None, *(a.tobytes() for a in inputs))
     if key not in _MADE:
         if len(_MADE) >= _MADE_MAX:
             del _MADE[next(iter(_MADE))]
-        _MADE[key] = _make_tables(building, units, springs, load_vec, dt, monitors)
+        _MADE[key] = _make_tables(building, units, springs, yld, load_vec, dt, monitors)
     return _MADE[key]
 
 
-def _make_tables(building, units, springs, load_vec, dt, monitors) -> ClearStep:
-    mass, stiffness, damping = _free_configuration(building, units, springs)
+def _make_tables(building, units, springs, yld, load_vec, dt, monitors) -> ClearStep | None:
+    mass, stiffness, damping = _free_configuration(building, units, springs, yld)
+    flying = np.diag(stiffness) == 0.0  # a unit without a spring: no mode, its flight a polynomial
+    if np.any(flying & (np.diag(damping) != 0.0)):
+        return None
+    if np.any(np.linalg.eigvalsh(stiffness[np.ix_(~flying, ~flying)]) <= 0.0):
+        return None
     n = len(mass)
-    generator = _generator(mass, stiffness, damping, load_vec)
+    nf = len(building.mass)
+    offsets = _offset_forces(n, yld)
+    generator = _generator(mass, stiffness, damping, load_vec, offsets)
+    size = generator.shape[0]
     flow = expm(generator * dt)[: 2 * n, :].copy()
-    roof = np.zeros(2 * n + 2)
+    roof = np.zeros(size)
     roof[:n] = monitors.rows[0]
-    work = np.zeros((2 * n + 2, 2 * n + 2))
+    work = np.zeros((size, size))
     work[2 * n, n : 2 * n] = work[n : 2 * n, 2 * n] = 0.5 * load_vec
     visc = np.zeros_like(work)
     visc[n : 2 * n, n : 2 * n] = damping
     forms = [_integral_of_form(generator, s, dt) for s in (work, visc, np.outer(roof, roof))]
-    part, modes = _reach(mass, stiffness, damping, load_vec, dt)
-    nf = len(building.mass)
+    part, modes = _reach(mass, stiffness, damping, load_vec, offsets, flying, dt)
     walled = np.flatnonzero(units.kind & UNIT_WALLS)
-    gap_rows = np.zeros((len(walled), n))
-    gap_rows[np.arange(len(walled)), nf + walled] = 1.0
-    gap_rows[np.arange(len(walled)), units.floor[walled]] = -1.0
+    bands = np.zeros((len(walled) + offsets.shape[1], n))  # each walled unit's gap, then each storey's drift
+    bands[np.arange(len(walled)), nf + walled] = 1.0
+    bands[np.arange(len(walled)), units.floor[walled]] = -1.0
+    for i in range(offsets.shape[1]):
+        bands[len(walled) + i, i] = 1.0
+        if i > 0:
+            bands[len(walled) + i, i - 1] = -1.0
     peaks = _rows(generator, monitors.rows, monitors.kind, monitors.record_coef, modes)
     slopes = _rows(generator, monitors.rows, monitors.kind, monitors.record_coef, modes, slope=True)
-    walls = _rows(generator, gap_rows, np.full(len(walled), MON_DISP), np.zeros(len(walled)), modes)
-    return ClearStep(flow, *forms, part, *peaks, *slopes, *walls, 0.5 * units.gap[walled], nf + walled, units.floor[walled],
+    band_rows = _rows(generator, bands, np.full(len(bands), MON_DISP), np.zeros(len(bands)), modes)
+    return ClearStep(flow, *forms, part, *peaks, *slopes, *band_rows, 0.5 * units.gap[walled],
                      _twins(units, springs, nf))
 
 
-def _free_configuration(building, units, springs):
-    """M, K and C over the floors and the units, every unit free: a unit's spring and dashpot join it to its
-    floor."""
+def _offset_forces(n: int, yld) -> np.ndarray:
+    """(n, storeys): the force on each degree of freedom per unit of each storey's plastic offset p on its elastic
+    branch, whose restoring force is k u - (1 - b) k p (none for an elastic building)."""
+    storeys = 0 if yld is None else len(yld.stiffness)
+    g = np.zeros((n, storeys))
+    for i in range(storeys):
+        pull = (1.0 - yld.hardening[i]) * yld.stiffness[i]
+        g[i, i] = pull
+        if i > 0:
+            g[i - 1, i] = -pull
+    return g
+
+
+def _free_configuration(building, units, springs, yld):
+    """M, K and C over the floors and the units, every unit free (a unit's spring and dashpot join it to its
+    floor) and every storey elastic (its stiffness k less P-delta's P / h)."""
     nf = len(building.mass)
     n = nf + len(units.mass)
     stiffness = np.zeros((n, n))
     damping = np.zeros((n, n))
     stiffness[:nf, :nf] = building.stiffness
     damping[:nf, :nf] = building.damping
+    if yld is not None:
+        for i, g in enumerate(yld.geometric):
+            floors = [i - 1, i] if i > 0 else [i]
+            stiffness[np.ix_(floors, floors)] -= g * (np.array([[1.0, -1.0], [-1.0, 1.0]]) if i > 0 else 1.0)
     if springs is not None:
         for j, f in enumerate(units.floor):
             u = nf + j
@@ -112,16 +144,20 @@ def _twins(units, springs, nf: int) -> np.ndarray:
     return twin
 
 
-def _generator(mass, stiffness, damping, load_vec) -> np.ndarray:
-    """d/dt of u = (q, q', f, f'): the scene's first-order system, driven by f, whose slope is constant."""
+def _generator(mass, stiffness, damping, load_vec, offsets=None) -> np.ndarray:
+    """d/dt of u = (q, q', f, f', p): the scene's first-order system, driven by f, whose slope is constant, and by
+    the storeys' plastic offsets p (constant on elastic branches; offsets: their forces, _offset_forces)."""
     n = len(mass)
+    held = 0 if offsets is None else offsets.shape[1]
     m_inv = 1.0 / mass[:, None]
-    gen = np.zeros((2 * n + 2, 2 * n + 2))
+    gen = np.zeros((2 * n + 2 + held, 2 * n + 2 + held))
     gen[:n, n : 2 * n] = np.eye(n)
     gen[n : 2 * n, :n] = -m_inv * stiffness
     gen[n : 2 * n, n : 2 * n] = -m_inv * damping
     gen[n : 2 * n, 2 * n] = load_vec / mass
     gen[2 * n, 2 * n + 1] = 1.0
+    if held:
+        gen[n : 2 * n, 2 * n + 2 :] = m_inv * offsets
     return gen
 
 
@@ -137,19 +173,20 @@ def _integral_of_form(generator: np.ndarray, form: np.ndarray, dt: float) -> np.
     return 0.5 * (q + q.T)
 
 
-def _reach(mass, stiffness, damping, load_vec, dt):
-    """The ramp's particular motion at the step's start, per unit f(0) and per unit slope f' ((2n, 2), zero for the
-    units without a spring), and the modes of every other degree of freedom as _rows reads them.  The particular
-    motion is q_p = a0 + a1 t with K a1 = l f' and K a0 + C a1 = l f(0)."""
+def _reach(mass, stiffness, damping, load_vec, offsets, flying, dt):
+    """The particular motion at the step's start per unit f(0), per unit slope f' and per unit of each storey's
+    offset ((2n, 2 + storeys), zero for the units without a spring), and the modes of every other degree of freedom
+    as _rows reads them.  The particular motion is q_p = a0 + a1 t with K a1 = l f' and K a0 + C a1 = l f(0) + G p."""
     n = len(mass)
-    flying = np.diag(stiffness) == 0.0  # a unit without a spring: no mode, its flight a polynomial
     modal = np.flatnonzero(~flying)
     k, c, l = stiffness[np.ix_(modal, modal)], damping[np.ix_(modal, modal)], load_vec[modal]
     per_slope = np.linalg.solve(k, l)
-    part = np.zeros((2 * n, 2))
+    part = np.zeros((2 * n, 2 + offsets.shape[1]))
     part[modal, 0] = per_slope
     part[modal, 1] = -np.linalg.solve(k, c @ per_slope)
     part[n + modal, 1] = per_slope
+    if offsets.shape[1]:
+        part[modal, 2:] = np.linalg.solve(k, offsets[modal])
     kap, vec = np.linalg.eig(_generator(mass[modal], k, c, l)[: 2 * len(modal), : 2 * len(modal)])
     growth = np.maximum(1.0, np.exp(kap.real * dt))
     return part, (modal, kap, vec, np.abs(np.linalg.inv(vec)), growth, np.where(flying, load_vec / mass, 0.0))
@@ -162,7 +199,7 @@ def _rows(generator, rows, kinds, record_coef, modes, slope=False):
     row's first derivative (its bound's load part per unit of |f'|)."""
     modal, kap, vec, vinv_abs, growth, flight = modes
     size = generator.shape[0]
-    n = (size - 2) // 2
+    n = rows.shape[1]
     states = np.concatenate([modal, n + modal])
     ends = np.zeros((len(kinds), size))
     bound = np.zeros((len(kinds), 2 * n))
@@ -200,10 +237,14 @@ def _form(q, u):
 
 @njit(cache=True, inline="always")
 def _row_ends(ends, bound, m, u, nxt, absy, r0, r_end):
-    """Row m at the step's start and end, and its modes' bound on |h''| over the step."""
+    """Row m at the step's start and end, and its modes' bound on |h''| over the step; u: the step's start
+    (q, q', f(0), f', p), nxt: its end's (q, q'), r_end: f at its end."""
     n2 = absy.shape[0]
     h0 = ends[m, n2] * r0
     h1 = ends[m, n2] * r_end
+    for j in range(n2 + 1, u.shape[0]):  # the load's slope and the plastic offsets, constant over the step
+        h0 += ends[m, j] * u[j]
+        h1 += ends[m, j] * u[j]
     reach = 0.0
     for j in range(n2):
         h0 += ends[m, j] * u[j]
@@ -213,17 +254,20 @@ def _row_ends(ends, bound, m, u, nxt, absy, r0, r_end):
 
 
 @njit(cache=True, inline="always")
-def _advance(flow, part, twin, u, nxt, absy, r0, r1):
+def _advance(flow, part, twin, u, nxt, absy):
     """The state at the step's end into nxt (a unit in its twin's state gets its twin's, to the bit), and
     |u - particular| into absy."""
     n2 = nxt.shape[0]
     n = n2 // 2
     for i in range(n2):
         acc = 0.0
-        for j in range(n2 + 2):
+        for j in range(u.shape[0]):
             acc += flow[i, j] * u[j]
         nxt[i] = acc
-        absy[i] = abs(u[i] - part[i, 0] * r0 - part[i, 1] * r1)
+        y = u[i]
+        for c in range(part.shape[1]):
+            y -= part[i, c] * u[n2 + c]
+        absy[i] = abs(y)
     for i in range(n):
         k = twin[i]
         if k >= 0 and u[i] == u[k] and u[n + i] == u[n + k]:
@@ -231,25 +275,44 @@ def _advance(flow, part, twin, u, nxt, absy, r0, r1):
             nxt[n + i] = nxt[n + k]
 
 
+@njit(cache=True, inline="always")
+def _bands(half, yld, lo, hi):
+    """Each band row's ends: a walled unit's walls, then each storey's elastic band, d_y about its plastic offset
+    and within its collapse limit."""
+    walls = half.shape[0]
+    for r in range(walls):
+        lo[r] = -half[r]
+        hi[r] = half[r]
+    if yld is not None:
+        for i in range(yld.offset.shape[0]):
+            lo[walls + i] = max(yld.offset[i] - yld.yield_drift[i], -yld.limit[i])
+            hi[walls + i] = min(yld.offset[i] + yld.yield_drift[i], yld.limit[i])
+
+
 @njit(cache=True)
-def clear_steps(clear, scratch, state, peaks, p, record, times, building, units, springs):
+def clear_steps(clear, scratch, state, peaks, p, record, times, building, units, springs, yld):
     """Whole record steps by the tables from t for as long as each is clear: whole, not cut by the window's start
-    nor holding a sample, no unit reaching a wall, and every monitor either within its running peak or monotone
-    over the step (its new peak then at an end); returns the time they reached, the state moved, the work and the
-    dissipation booked in diag, the roof's square in x2 where a step is in the window.  times: (t, the run's end,
-    the window's start, the next sample's time); state: (q, v, diag); peaks: (each monitor's running peak, its
-    time, its cap, its window square); scratch: (u, the next state, |y|, a monitor's value at an end that raises
-    its peak, and the time from the step's start, -1 where none); building, units, springs (None without): the
-    scene's, whose energy the largest-energy diagnostic reads.  The bundles are unpacked once: unpacked on every
-    step, each of their arrays cost a reference count there."""
-    flow, work, visc, square, part, ends, bound, load_bound, slope_ends, slope_bound, slope_load, wall_ends, \
-        wall_bound, wall_load, half, wall_unit, wall_floor, twin = clear
-    u, nxt, absy, top, at = scratch
+    nor holding a sample, no unit reaching a wall and no storey the end of its elastic band, and every monitor
+    either within its running peak or monotone over the step (its new peak then at an end); returns the time they
+    reached, the state moved, the work and the dissipation booked in diag, the roof's square in x2 where a step
+    is in the window.  times: (t, the run's end, the window's start, the next sample's time); state: (q, v, diag);
+    peaks: (each monitor's running peak, its time, its cap, its window square); scratch: (u, the next state,
+    |y|, a monitor's value at an end that raises its peak and the time from the step's start, -1 where none, each
+    band's lower and upper end); building, units, springs (None without), yld (None: elastic): the scene's, whose
+    energy the largest-energy diagnostic reads.  The bundles are unpacked once: unpacked on every step, each of
+    their arrays cost a reference count there."""
+    flow, work, visc, square, part, ends, bound, load_bound, slope_ends, slope_bound, slope_load, band_ends, \
+        band_bound, band_load, half, twin = clear
+    u, nxt, absy, top, at, lo, hi = scratch
     q, v, diag = state
     peak, peak_t, cap, x2 = peaks
     t, t_end, t_square, t_sample = times
     nf = building.mass.shape[0]
     n = q.shape[0]
+    _bands(half, yld, lo, hi)
+    if yld is not None:
+        for i in range(yld.offset.shape[0]):
+            u[2 * n + 2 + i] = yld.offset[i]
     while True:
         r0, r1, t_next = record_value(record, p, t)
         tau = whole_step(p, t, t_next, t_end)
@@ -260,16 +323,21 @@ def clear_steps(clear, scratch, state, peaks, p, record, times, building, units,
             u[n + i] = v[i]
         u[2 * n] = r0
         u[2 * n + 1] = r1
-        _advance(flow, part, twin, u, nxt, absy, r0, r1)
+        _advance(flow, part, twin, u, nxt, absy)
         r_end = r0 + r1 * tau
         spread = tau * tau / 8.0
         f_max = max(abs(r0), abs(r_end))
-        for r in range(half.shape[0]):
-            h0, h1, reach = _row_ends(wall_ends, wall_bound, r, u, nxt, absy, r0, r_end)
-            # inside by the margin of the gap and of the positions the row is the difference of
-            margin = WALL_MARGIN * (2.0 * half[r] + abs(u[wall_unit[r]]) + abs(u[wall_floor[r]]) + abs(h1 - h0))
-            bulge = (reach + wall_load[r] * f_max) * spread + margin
-            if max(h0, h1) + bulge >= half[r] or min(h0, h1) - bulge <= -half[r]:
+        for r in range(lo.shape[0]):
+            if hi[r] - lo[r] == np.inf:
+                continue  # a storey that neither yields nor collapses
+            h0, h1, reach = _row_ends(band_ends, band_bound, r, u, nxt, absy, r0, r_end)
+            size = 0.0
+            for j in range(n):
+                size += abs(band_ends[r, j] * u[j])
+            # inside by the margin of the band and of the positions the row is the difference of
+            margin = WALL_MARGIN * (min(hi[r] - lo[r], 2.0 * (abs(h0) + abs(h1))) + size + abs(h1 - h0))
+            bulge = (reach + band_load[r] * f_max) * spread + margin
+            if max(h0, h1) + bulge >= hi[r] or min(h0, h1) - bulge <= lo[r]:
                 return t
         for m in range(ends.shape[0]):
             at[m] = -1.0
@@ -298,5 +366,8 @@ def clear_steps(clear, scratch, state, peaks, p, record, times, building, units,
             v[i] = nxt[n + i]
         diag[D_SEGMENTS] += 1.0
         diag[D_CLEAR] += 1.0
-        diag[D_EMAX] = max(diag[D_EMAX], energy(building, units, springs, None, nf, q, v))
+        e_now = energy(building, units, springs, yld, nf, q, v)
+        if yld is not None:
+            e_now += storey_gravity(yld, q)  # as scene_loop.move_to_end counts the balance's scale
+        diag[D_EMAX] = max(diag[D_EMAX], e_now)
         t = t_next

@@ -237,6 +237,16 @@ def _all_free(mode, escape):
 
 
 @njit(cache=True, inline='always')
+def _all_elastic(yld):
+    """Every storey on its elastic branch and none leaving a surface (an elastic building's always)."""
+    if yld is not None:
+        for i in range(yld.branch.shape[0]):
+            if yld.branch[i] != BRANCH_ELASTIC or yld.escape[i] != 0 or yld.escape_v[i] != 0:
+                return False
+    return True
+
+
+@njit(cache=True, inline='always')
 def _same_unit_state(j, nf, units, springs, w):
     mode, side, sigma, escape, escape_v, C, P = w.mode, w.side, w.sigma, w.escape, w.escape_v, w.C, w.P
     i = j - 1
@@ -1470,11 +1480,13 @@ def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out)
     if clear is not None:
         n2 = 2 * (nf + nu)
         nmon = monitors.kind.shape[0]
-        clear_scratch = (np.empty(n2 + 2), np.empty(n2), np.empty(n2), np.empty(nmon), np.empty(nmon))
+        nband = clear.band_ends.shape[0]
+        clear_scratch = (np.empty(clear.flow.shape[1]), np.empty(n2), np.empty(n2), np.empty(nmon), np.empty(nmon),
+                         np.empty(nband), np.empty(nband))
     while t < t_end:
-        if clear is not None and _all_free(mode, escape):
+        if clear is not None and _all_free(mode, escape) and _all_elastic(yld):
             t = clear_steps(clear, clear_scratch, (q, v, diag), (out.peak, out.peak_t, monitors.cap, out.x2), p, record,
-                            (t, t_end, t_square, ts[its] if its < ts.shape[0] else np.inf), building, units, springs)
+                            (t, t_end, t_square, ts[its] if its < ts.shape[0] else np.inf), building, units, springs, yld)
         r0, r1, theta0, t_next, tau_max = segment_load(p, record, harm, t, t_end)
         key = scene_key(mode, yld)
         if key != slot_key:

@@ -350,10 +350,9 @@ def _scene_arrays(scene: Scene, peaks=PEAK_GROUPS, window: bool = True):
     p[L.P_REC_T0] = 0.0
     p[L.P_REC_DT] = rec_dt
     clear = None
-    if record is not None and fric is None and yld is None and not np.any((k == 0.0) & (c != 0.0)):
-        # an elastic building whose units, free, fly or swing linearly: whole record steps by matrices where clear
-        # (a unit with a dashpot and no spring would neither fly freely nor have a mode of its own)
-        clear = clear_step_tables(building, units, springs, load_vec, rec_dt, monitors)
+    if record is not None and fric is None and not p[L.P_FROM_ITSELF]:
+        # whole record steps by matrices where clear (none past the stability bound, whose rows lose their digits)
+        clear = clear_step_tables(building, units, springs, yld, load_vec, rec_dt, monitors)
     return dict(model=SceneArrays(p, building, units, load_vec, monitors), springs=springs, fric=fric, harm=harm,
                 record=record, yld=yld, clear=clear, start=StartState(q0, v0, mode0, side0),
                 cache=_cache(nf + n_spring))
