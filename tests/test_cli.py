@@ -197,7 +197,8 @@ def test_quake_compares_with_the_bare_building_and_writes_its_series(tmp_path, c
     out = _quake(capsys, "--storeys", "2", "--damper", "pid", "--gap-m", "0.04", "--units", "2", "--compare-bare",
                  "--series", str(series))
     for key, value in out["bare"].items():
-        assert value == bare[key]
+        # the same bare run but for the series' samples inside record steps, which those steps take by the rows
+        assert value == pytest.approx(bare[key], rel=1e-12)
         assert out["ratio_to_bare"][key] == pytest.approx(out[key] / value, rel=1e-15)
     import pandas as pd
 

@@ -1485,7 +1485,7 @@ def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out)
                          np.empty(nband), np.empty(nband))
     while t < t_end:
         if clear is not None and _all_free(mode, escape) and _all_elastic(yld):
-            t = clear_steps(clear, clear_scratch, (q, v, diag), (out.peak, out.peak_t, monitors.cap, out.x2), p, record,
+            t = clear_steps(clear, clear_scratch, (q, v, diag), (out.peak, out.peak_t, monitors.cap, out.x2), (p, record),
                             (t, t_end, t_square, ts[its] if its < ts.shape[0] else np.inf), building, units, springs, yld)
         r0, r1, theta0, t_next, tau_max = segment_load(p, record, harm, t, t_end)
         key = scene_key(mode, yld)
