@@ -132,11 +132,13 @@ def test_unknown_measures_and_stray_options_are_refused_by_name():
         engine.simulate(scene, record=3)
 
 
-def test_a_run_certifies_the_peaks_it_is_asked_for_to_the_bit_and_no_others():
-    """A run asked for the drifts or the strokes alone certifies those peaks exactly as a run asked for every peak
+def test_a_run_certifies_the_peaks_it_is_asked_for_to_round_off_and_no_others():
+    """A run asked for the drifts or the strokes alone certifies those peaks as a run asked for every peak does
     (each monitor is searched on its own; the roof's row still gives the window its square when the amplitude is
     asked, and no window is integrated when neither it nor every peak is), reads NaN for the others, and moves,
-    impacts and balances its energy to the bit as the full run does."""
+    impacts and balances its energy as the full run does.  To round-off, not to the bit: a whole record step is
+    taken by matrices where the monitors asked for are proved clear in it (engine/clear_step.py), so a run asked
+    for fewer takes a few more such steps (176 against 174 here), each the same motion to round-off."""
     building = Building.uniform(3, 1.0, 0.02)
     t = np.arange(0.0, 6.0, 0.01)
     quake = GroundMotion(3.0 * np.sin(2.0 * np.pi * t) * np.exp(-0.3 * t), 0.01)
@@ -145,19 +147,20 @@ def test_a_run_certifies_the_peaks_it_is_asked_for_to_the_bit_and_no_others():
     drifts = engine.simulate(scene, measures=("amplitude", "impacts", "drifts"))
     strokes = engine.simulate(scene, measures=("amplitude", "impacts", "strokes"))
     assert full.impacts > 10 and np.all(full.peak_strokes > 0.0)  # the units reach their walls
-    np.testing.assert_array_equal(drifts.peak_drifts, full.peak_drifts)
-    np.testing.assert_array_equal(strokes.peak_strokes, full.peak_strokes)
+    np.testing.assert_allclose(drifts.peak_drifts, full.peak_drifts, rtol=1e-12)
+    np.testing.assert_allclose(strokes.peak_strokes, full.peak_strokes, rtol=1e-12)
+    scale = np.max(np.abs(full.final_q))
     for part in (drifts, strokes):
-        np.testing.assert_array_equal(part.final_q, full.final_q)
-        assert (part.impacts, part.amplitude, part.diagnostics["energy_residual"]) == \
-            (full.impacts, full.amplitude, full.diagnostics["energy_residual"])
+        np.testing.assert_allclose(part.final_q, full.final_q, rtol=0, atol=1e-12 * scale)
+        assert part.impacts == full.impacts and part.amplitude == pytest.approx(full.amplitude, rel=1e-12)
+        assert abs(part.diagnostics["energy_residual"]) <= 1e-12
         assert math.isnan(part.peak_roof_displacement) and math.isnan(part.peak_roof_acceleration)
     assert np.all(np.isnan(drifts.peak_strokes)) and np.all(np.isnan(strokes.peak_drifts))
     # the collapse stage's run: no amplitude, so no window; the same drifts, motion, impacts and energy
     bare = engine.simulate(scene, measures=("impacts", "drifts"))
-    np.testing.assert_array_equal(bare.peak_drifts, full.peak_drifts)
-    np.testing.assert_array_equal(bare.final_q, full.final_q)
-    assert (bare.impacts, bare.diagnostics["energy_residual"]) == (full.impacts, full.diagnostics["energy_residual"])
+    np.testing.assert_allclose(bare.peak_drifts, full.peak_drifts, rtol=1e-12)
+    np.testing.assert_allclose(bare.final_q, full.final_q, rtol=0, atol=1e-12 * scale)
+    assert bare.impacts == full.impacts and abs(bare.diagnostics["energy_residual"]) <= 1e-12
     assert math.isnan(bare.amplitude) and math.isnan(bare.rms_roof_displacement) and full.amplitude > 0.0
     assert math.isnan(engine.simulate(scene).peak_interstorey_drift)  # the default asks for no peak
     with pytest.raises(ParameterError, match="peaks: 'storeys' unknown; allowed roof, drifts, strokes"):
