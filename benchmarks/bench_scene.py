@@ -125,8 +125,8 @@ def opensees_case(name: str, building: Building, gm: GroundMotion) -> dict | Non
 def scene_case(name: str, scene: Scene, repeats: int, peaks=PEAK_GROUPS, window: bool = True) -> dict:
     seconds, res = best_time(lambda: simulate_scene(scene, peaks=peaks, window=window), repeats)
     d = res.diagnostics
-    out = {"case": name, "ms_per_run": 1e3 * seconds, "segments": d["segments"], "impacts": d["impacts"],
-           "us_per_segment": 1e6 * seconds / max(d["segments"], 1),
+    out = {"case": name, "ms_per_run": 1e3 * seconds, "segments": d["segments"], "clear_steps": d["clear_steps"],
+           "impacts": d["impacts"], "us_per_segment": 1e6 * seconds / max(d["segments"], 1),
            "us_per_impact": 1e6 * seconds / d["impacts"] if d["impacts"] else None,
            "peak_roof_displacement": res.peak_roof_displacement, "energy_residual": d["energy_residual"]}
     print(json.dumps(out))

@@ -57,8 +57,8 @@ def engine_case(name: str, scene: Scene, repeats: int) -> dict:
     d = res.diagnostics
     yields = int(res.storeys.yield_events.sum()) if res.storeys is not None else 0
     events = d["impacts"] + yields
-    out = {"case": name, "ms_per_run": 1e3 * seconds, "segments": d["segments"], "impacts": d["impacts"],
-           "yield_events": yields, "us_per_event": 1e6 * seconds / events if events else None,
+    out = {"case": name, "ms_per_run": 1e3 * seconds, "segments": d["segments"], "clear_steps": d["clear_steps"],
+           "impacts": d["impacts"], "yield_events": yields, "us_per_event": 1e6 * seconds / events if events else None,
            "peak_drift_m": float(np.max(res.peak_drifts)), "energy_residual": d["energy_residual"]}
     print(json.dumps(out))
     return out

@@ -43,14 +43,16 @@ SpringArrays = namedtuple("SpringArrays", "stiffness damping")
 YieldArrays = namedtuple("YieldArrays", "stiffness hardening yield_drift geometric limit branch offset escape escape_v "
                                         "plastic yields")
 
-#: a whole record step by matrices (clear_step.clear_step_tables), every unit free and every storey elastic: the
+#: a whole record step by matrices (clear_step.clear_step_tables), every unit free, for each pattern of the storeys'
+#: branches it is made for (masks: the yielding storeys' bits, 0 first), each array the patterns' rows stacked: the
 #: state's flow over (q, q', f(0), f', p), the quadratic forms of the load's work, the viscous dissipation and the
-#: roof's square over the step, the particular motion at the step's start; per monitor its row, the row bounding
-#: its second derivative and the load's part of that bound, and the same three of its slope; the same three for
-#: each band row (each walled unit's gap, then each storey's drift), each walled unit's half gap; and each degree of
-#: freedom's twin (the same unit before it, or -1)
-ClearStep = namedtuple("ClearStep", "flow work visc square part ends bound load_bound slope_ends slope_bound "
-                                    "slope_load band_ends band_bound band_load half twin")
+#: roof's square over the step, the particular motion at the step's start, the rows reading the modal amplitudes
+#: of the state less it (one of each complex pair) and their sizes; then a table of rows (each monitor, each
+#: monitor's slope, each band: a walled unit's gap, then each storey's drift; each storey's drift velocity): each
+#: row over the state (ends), the rows bounding its second derivative (bound: over |state less particular|, then
+#: over the modal amplitudes' moduli) and the load's part of that bound (load); then, for every pattern, each walled
+#: unit's half gap and each degree of freedom's twin (the same unit before it, or -1)
+ClearStep = namedtuple("ClearStep", "masks flow work visc square part inv inv_size ends bound load half twin")
 
 #: what the run certifies peaks of: rows over the degrees of freedom, kind (layout.MON_*),
 #: the record's coefficient (an absolute acceleration) and a cap the peak cannot pass

@@ -87,7 +87,6 @@ from impact.engine.layout import (
     D_NREC,
     D_PEAK_GAVE_UP,
     D_PEN_EXCESS,
-    D_PLASTIC,
     D_SEGMENTS,
     D_SIMULTANEOUS,
     D_STEPS,
@@ -156,6 +155,7 @@ from impact.engine.segment import (
     int_prod_ramp,
     integral_tables,
     kappa_powers,
+    plastic_flow,
     poly_at,
     ramp_tables,
     record_value,
@@ -237,11 +237,12 @@ def _all_free(mode, escape):
 
 
 @njit(cache=True, inline='always')
-def _all_elastic(yld):
-    """Every storey on its elastic branch and none leaving a surface (an elastic building's always)."""
+def _storeys_settled(yld):
+    """No storey leaving its yield surface or its turning point (an elastic building's always): the state
+    clear_step's tables start from, on whichever branches."""
     if yld is not None:
         for i in range(yld.branch.shape[0]):
-            if yld.branch[i] != BRANCH_ELASTIC or yld.escape[i] != 0 or yld.escape_v[i] != 0:
+            if yld.escape[i] != 0 or yld.escape_v[i] != 0:
                 return False
     return True
 
@@ -675,21 +676,6 @@ def storeys_after_segment(yld, q, v):
         if escape[i] != 0 and not (_on_surface(yld, i, q) and escape[i] * storey_drift(v, i) <= 0.0):
             escape[i] = 0
         escape_v[i] = 0
-
-
-@njit(cache=True, inline='always')
-def plastic_flow(yld, q, diag):
-    """A yielding storey's offset follows its drift (u - p = s d_y), and the perfectly plastic element's force
-    s (1 - b) k d_y does the plastic work (1 - b) k d_y |dp|, exact since s u' >= 0 all along the segment."""
-    branch, dy, offset, hardening, stiffness, plastic = (yld.branch, yld.yield_drift, yld.offset, yld.hardening,
-                                                         yld.stiffness, yld.plastic)
-    for i in range(branch.shape[0]):
-        if branch[i] != BRANCH_ELASTIC:
-            p_new = storey_drift(q, i) - branch[i] * dy[i]
-            work = (1.0 - hardening[i]) * stiffness[i] * dy[i] * branch[i] * (p_new - offset[i])
-            plastic[i] += work
-            diag[D_PLASTIC] += work
-            offset[i] = p_new
 
 
 @njit(cache=True, inline='always')
@@ -1480,11 +1466,12 @@ def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out)
     if clear is not None:
         n2 = 2 * (nf + nu)
         nmon = monitors.kind.shape[0]
-        nband = clear.band_ends.shape[0]
-        clear_scratch = (np.empty(clear.flow.shape[1]), np.empty(n2), np.empty(n2), np.empty(nmon), np.empty(nmon),
+        nband = clear.half.shape[0] + (yld.branch.shape[0] if yld is not None else 0)
+        clear_scratch = (np.empty(clear.flow.shape[1]), np.empty(n2), np.empty(n2),
+                         np.empty(n2 + clear.inv.shape[0] // clear.masks.shape[0]), np.empty(2 * nmon),
                          np.empty(nband), np.empty(nband))
     while t < t_end:
-        if clear is not None and _all_free(mode, escape) and _all_elastic(yld):
+        if clear is not None and _all_free(mode, escape) and _storeys_settled(yld):
             t = clear_steps(clear, clear_scratch, (q, v, diag), (out.peak, out.peak_t, monitors.cap, out.x2), (p, record),
                             (t, t_end, t_square, ts[its] if its < ts.shape[0] else np.inf), building, units, springs, yld)
         r0, r1, theta0, t_next, tau_max = segment_load(p, record, harm, t, t_end)

@@ -21,7 +21,7 @@ import math
 import numpy as np
 from numba import njit
 
-from impact.engine.layout import BRANCH_ELASTIC, MODE_FREE, NPOLY, P_REC_DT, P_REC_T0, UNIT_SPRING
+from impact.engine.layout import BRANCH_ELASTIC, D_PLASTIC, MODE_FREE, NPOLY, P_REC_DT, P_REC_T0, UNIT_SPRING
 
 _SERIES = 0.5  # |z T| below which the integrals use their power series
 # _phi0's series: below 0.05 its closed form loses more than eps / 0.05 = 4e-15 (relative) to cancellation,
@@ -346,7 +346,7 @@ def scene_key(mode, yld):
 
 
 @njit(cache=True)
-def _storey_stiffness(yld, kr):
+def storey_stiffness(yld, kr):
     """P-delta's geometric stiffness -P/h on every storey, and a yielding storey's stiffness taken down to b k;
     returns how many storeys are left without stiffness (yielding, b = 0, no P-delta): K's zero modes."""
     flat = 0
@@ -469,6 +469,15 @@ def _newton_refined(lk, psi, m, kr, cr, n, lam_reach):
 
 
 @njit(cache=True)
+def join(matrix, a, b, value):
+    """A spring (or dashpot) of stiffness value between degrees of freedom a and b, added into matrix."""
+    matrix[a, a] += value
+    matrix[b, b] += value
+    matrix[a, b] -= value
+    matrix[b, a] -= value
+
+
+@njit(cache=True)
 def _assemble(building, units, springs, yld, load_vec, mode, cache, s):
     """Reduced M, K, C and the reduced load of one configuration, into slot s.
 
@@ -508,20 +517,13 @@ def _assemble(building, units, springs, yld, load_vec, mode, cache, s):
         uk, uc = springs
         for r in range(nf, n):
             j = fidx[s, r] - nf
-            f = ufloor[j]
             m[r] = um[j]
             lr[r] = load_vec[nf + j]
-            kr[f, f] += uk[j]
-            kr[r, r] += uk[j]
-            kr[f, r] -= uk[j]
-            kr[r, f] -= uk[j]
-            cr[f, f] += uc[j]
-            cr[r, r] += uc[j]
-            cr[f, r] -= uc[j]
-            cr[r, f] -= uc[j]
+            join(kr, ufloor[j], r, uk[j])
+            join(cr, ufloor[j], r, uc[j])
     flat = 0
     if yld is not None:
-        flat = _storey_stiffness(yld, kr)
+        flat = storey_stiffness(yld, kr)
     a_mat = np.zeros((2 * n, 2 * n), dtype=np.complex128)
     for i in range(n):
         a_mat[i, n + i] = 1.0
@@ -1124,3 +1126,19 @@ def storey_gravity(yld, q):
         u = storey_drift(q, i)
         e += g[i] * u * u
     return e
+
+
+@njit(cache=True, inline='always')
+def plastic_flow(yld, q, diag):
+    """A yielding storey's offset follows its drift (u - p = s d_y), and the perfectly plastic element's force
+    s (1 - b) k d_y does the plastic work (1 - b) k d_y |dp|, exact since s u' >= 0 all along the segment (or the
+    whole record step, clear_step) just taken."""
+    branch, dy, offset, hardening, stiffness, plastic = (yld.branch, yld.yield_drift, yld.offset, yld.hardening,
+                                                         yld.stiffness, yld.plastic)
+    for i in range(branch.shape[0]):
+        if branch[i] != BRANCH_ELASTIC:
+            p_new = storey_drift(q, i) - branch[i] * dy[i]
+            work = (1.0 - hardening[i]) * stiffness[i] * dy[i] * branch[i] * (p_new - offset[i])
+            plastic[i] += work
+            diag[D_PLASTIC] += work
+            offset[i] = p_new
