@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -23,6 +24,9 @@ HERE = Path(__file__).parent
 #: OpenBLAS's generic x86-64 kernels (it reports them as Katmai): every x86-64 CPU runs them
 GENERIC = "Prescott"
 OPENBLAS, NUMPY = kernels.PINS["openblas"], kernels.PINS["numpy"]
+THREADS = kernels.THREADS
+#: how kernels() names one OpenBLAS under the study's set and thread count
+STUDY_BLAS = f"openblas {OPENBLAS.value} {THREADS.value} thread"
 
 
 @pytest.fixture
@@ -33,7 +37,8 @@ def any_cpu(monkeypatch):
 def test_the_pinned_sets_are_chosen_unless_another_is_named(any_cpu):
     env = {}
     assert kernels.apply(env) == {"openblas": OPENBLAS.value, "numpy": NUMPY.value}
-    assert env == {OPENBLAS.variable: OPENBLAS.value, NUMPY.variable: NUMPY.value} and kernels.pinned(env)
+    assert env == {OPENBLAS.variable: OPENBLAS.value, NUMPY.variable: NUMPY.value, THREADS.variable: THREADS.value}
+    assert kernels.pinned(env)
     env = {OPENBLAS.override: "SkylakeX", OPENBLAS.variable: "Haswell"}
     assert kernels.apply(env)["openblas"] == "SkylakeX" and env[OPENBLAS.variable] == "SkylakeX"
     assert not kernels.pinned(env)
@@ -43,6 +48,30 @@ def test_native_leaves_the_choice_to_the_library_not_to_the_machines_environment
     env = {OPENBLAS.override: "native", OPENBLAS.variable: "Haswell", NUMPY.override: "NATIVE"}
     assert kernels.apply(env) == {"openblas": None, "numpy": None}
     assert OPENBLAS.variable not in env and NUMPY.variable not in env
+
+
+def test_openblas_runs_one_thread_unless_another_count_is_named():
+    """Whatever the machine's environment says (a thread count rounds: docs/performance.md) and whatever the CPU."""
+    env = {THREADS.variable: "8"}
+    kernels.apply(env)
+    assert env[THREADS.variable] == THREADS.value == "1" and kernels.threads(env) == "1"
+    env = {THREADS.override: "2", THREADS.variable: "8"}
+    kernels.apply(env)
+    assert env[THREADS.variable] == "2" and not kernels.pinned(env)
+    env = {THREADS.override: "native", THREADS.variable: "8"}
+    kernels.apply(env)
+    assert THREADS.variable not in env and kernels.threads(env) is None
+
+
+def test_every_job_of_the_study_runs_the_pinned_thread_count():
+    """Snakemake sets OpenBLAS's threads to a job's own (its rule's `threads`, 1 where unsaid): a rule asking for
+    more would round its matrices otherwise than the tests and the command line do."""
+    asked = {}
+    for smk in sorted((HERE.parent / "workflow" / "rules").glob("*.smk")):
+        for block in re.split(r"(?m)^(?=rule )", smk.read_text())[1:]:
+            asked[block.split()[1].rstrip(":")] = re.findall(r"(?m)^\s+threads:\s*(.+?)\s*$", block)
+    assert len(asked) > 30
+    assert {rule: said for rule, said in asked.items() if said not in ([], [THREADS.value])} == {}
 
 
 def test_a_cpu_that_cannot_run_the_pinned_sets_is_left_to_the_libraries(monkeypatch, tmp_path):
@@ -61,7 +90,7 @@ def test_this_test_run_computes_with_the_pinned_sets():
     if not kernels.pinned():
         pytest.skip(f"this run computes with {kernels.chosen()}")
     loops, blas = kernels.kernels().split("; ")
-    assert loops == f"numpy {NUMPY.value}" and set(blas.split(", ")) == {f"openblas {OPENBLAS.value}"}
+    assert loops == f"numpy {NUMPY.value}" and set(blas.split(", ")) == {STUDY_BLAS}
 
 
 def _values(**overrides: str) -> dict:
@@ -83,7 +112,7 @@ def pinned():
 @pytest.mark.slow
 def test_the_pinned_sets_give_the_same_bits_in_another_process(pinned):
     again = _values()
-    both = f"numpy {NUMPY.value}; openblas {OPENBLAS.value}, openblas {OPENBLAS.value}"
+    both = f"numpy {NUMPY.value}; {STUDY_BLAS}, {STUDY_BLAS}"
     assert again["kernels"] == pinned["kernels"] == both
     assert {k: v["value"] for k, v in again["values"].items()} == {k: v["value"] for k, v in pinned["values"].items()}
 
@@ -110,10 +139,10 @@ def test_a_script_runs_under_the_pinned_sets(tmp_path):
     script = tmp_path / "script.py"
     script.write_text("import sys\nfrom impact import kernels\nimport numpy\n"
                       "print(sys.argv[1:], kernels.pinned(), kernels.kernels())\n")
-    env = {k: v for k, v in os.environ.items() if k not in (OPENBLAS.variable, NUMPY.variable)}
+    env = {k: v for k, v in os.environ.items() if k not in (OPENBLAS.variable, NUMPY.variable, THREADS.variable)}
     proc = subprocess.run([sys.executable, "-m", "impact.kernels", str(script), "--quick"], env=env,
                           capture_output=True, text=True, timeout=HANG_GUARD_S)
     assert proc.returncode == 0, proc.stderr
     if not kernels.pinned({}):
         pytest.skip("this CPU does not run the pinned kernel sets")
-    assert proc.stdout.startswith(f"['--quick'] True numpy {NUMPY.value}; openblas {OPENBLAS.value}")
+    assert proc.stdout.startswith(f"['--quick'] True numpy {NUMPY.value}; {STUDY_BLAS}")

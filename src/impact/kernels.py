@@ -17,6 +17,13 @@ standard library only, for that reason.
 Each pin's ``override`` variable names another set for one run (``native`` leaves the choice to the library):
 the round-off ensemble of the smoke fingerprint (``tools/roundoff_ensemble.py``) and the benchmarks of this
 policy's cost use them.
+
+OpenBLAS's thread count rounds too: a thread per core splits a matrix product's work another way, and a 10-storey
+scene's tables and its peak drift come out different in the last bits with two threads than with one.  Snakemake
+gives each of the study's jobs one (its rules ask for one thread, and it sets OpenBLAS's variable to that), so
+:func:`apply` gives every other process one as well, the tests and the command line included: they then compute
+the study's bits on any machine whatever its core count, and faster (the matrices are small enough that a second
+thread waits more than it works; ``docs/performance.md``).
 """
 
 from __future__ import annotations
@@ -42,6 +49,8 @@ PINS = {
     # numpy 2.4's name for its AVX2 and FMA loops (its AVX-512 ones are X86_V4 and AVX512_*)
     "numpy": Pin("NPY_ENABLE_CPU_FEATURES", "X86_V3", "IMPACT_NUMPY_CPU_FEATURES"),
 }
+#: OpenBLAS's threads per process: one, as Snakemake gives each job of the study
+THREADS = Pin("OPENBLAS_NUM_THREADS", "1", "IMPACT_OPENBLAS_NUM_THREADS")
 #: an override's value that leaves the choice to the library
 NATIVE = "native"
 #: the CPU features both pinned sets need (x86-64-v3; Linux's names in /proc/cpuinfo)
@@ -81,33 +90,48 @@ def chosen(environ=None) -> dict:
     return out
 
 
+def threads(environ=None) -> str | None:
+    """OpenBLAS's thread count for this process: the override where one is given (None for ``native``: the
+    library's own choice, a thread per core), else THREADS' one, whatever the CPU."""
+    environ = os.environ if environ is None else environ
+    wanted = environ.get(THREADS.override, "").strip()
+    if not wanted:
+        return THREADS.value
+    return None if wanted.lower() == NATIVE else wanted
+
+
 def apply(environ=None) -> dict:
-    """Set each library's kernel set in ``environ`` (this process's by default, which child processes inherit)
-    and return :func:`chosen`'s answer.  A library left to choose has its variable removed, so that no value
-    inherited from the machine decides instead.  In this process it takes effect only before numpy loads."""
+    """Set each library's kernel set and OpenBLAS's thread count (:func:`threads`) in ``environ`` (this process's
+    by default, which child processes inherit) and return :func:`chosen`'s answer.  A library left to choose has
+    its variable removed, so that no value inherited from the machine decides instead.  In this process it takes
+    effect only before numpy loads."""
     environ = os.environ if environ is None else environ
     sets = chosen(environ)
-    for library, value in sets.items():
+    wanted = [(PINS[library].variable, value) for library, value in sets.items()]
+    for variable, value in [*wanted, (THREADS.variable, threads(environ))]:
         if value is None:
-            environ.pop(PINS[library].variable, None)
+            environ.pop(variable, None)
         else:
-            environ[PINS[library].variable] = value
+            environ[variable] = value
     return sets
 
 
 def pinned(environ=None) -> bool:
-    """Whether this process runs the study's own kernel sets."""
-    return all(value == PINS[library].value for library, value in chosen(environ).items())
+    """Whether this process runs the study's own kernel sets and thread count."""
+    return (all(value == PINS[library].value for library, value in chosen(environ).items())
+            and threads(environ) == THREADS.value)
 
 
 def kernels() -> str:
-    """The kernel sets the loaded libraries run, e.g. 'numpy X86_V3; openblas Haswell, openblas Haswell' (numpy's
-    loops, then numpy's and scipy's OpenBLAS), for a result's provenance: read from the libraries themselves."""
+    """The kernel sets the loaded libraries run and OpenBLAS's threads, e.g. 'numpy X86_V3; openblas Haswell 1
+    thread, openblas Haswell 1 thread' (numpy's loops, then numpy's and scipy's OpenBLAS), for a result's
+    provenance: read from the libraries themselves."""
     from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
     from threadpoolctl import threadpool_info
 
     loops = [name for name in __cpu_dispatch__ if __cpu_features__.get(name)]
-    blas = sorted(f"{info['internal_api']} {info.get('architecture') or 'unknown'}"
+    blas = sorted(f"{info['internal_api']} {info.get('architecture') or 'unknown'} {info['num_threads']} "
+                  f"thread{'' if info['num_threads'] == 1 else 's'}"
                   for info in threadpool_info() if info.get("user_api") == "blas")
     return f"numpy {' '.join(loops) or 'baseline'}; {', '.join(blas) or 'no BLAS loaded'}"
 
