@@ -855,6 +855,14 @@ def monitor_modal(w, s, n, tau, t, t_win, monitors, ramp, harmonic, yielding):
         h0, h1 = end_values(ek, cm, pm, tau)
         ends = max(abs(h0), abs(h1))
         peak = mon_peak[m]
+        if ends >= mon_cap[m] * (1.0 - PEAK_RTOL):
+            # a stroke at its wall at an end of the segment: the wall bounds it over the segment (a unit through
+            # its wall is measured apart, as penetration), so that end is its peak, without a search that its
+            # row's cancelling terms could keep from settling (a unit resting at its wall as a record starts)
+            if ends > peak:
+                mon_peak[m] = ends
+                mon_peak_t[m] = t + (tau if abs(h1) >= abs(h0) else 0.0)
+            continue
         if ends > peak or ends + curvature_bound(w, s, m, n, tau, harmonic) * tau * tau / 8.0 \
                 > peak * (1.0 + PEAK_RTOL):
             peak, at, certified, slack = peak_abs(kap, kpow, ek, cm, pm, tau, peak, stack)
