@@ -82,22 +82,23 @@ def chosen(environ=None) -> dict:
     runs_pins = _cpu_can_run_it()
     out = {}
     for library, pin in PINS.items():
-        wanted = environ.get(pin.override, "").strip()
-        if wanted:
-            out[library] = None if wanted.lower() == NATIVE else wanted
-        else:
-            out[library] = pin.value if runs_pins else None
+        named = _named(pin, environ)
+        out[library] = (pin.value if runs_pins else None) if named == "" else named
     return out
+
+
+def _named(pin: Pin, environ) -> str | None:
+    """What a pin's override names for this run: a value, None for ``native`` (the library's own choice), or ''
+    where it names nothing."""
+    wanted = environ.get(pin.override, "").strip()
+    return None if wanted.lower() == NATIVE else wanted
 
 
 def threads(environ=None) -> str | None:
     """OpenBLAS's thread count for this process: the override where one is given (None for ``native``: the
     library's own choice, a thread per core), else THREADS' one, whatever the CPU."""
-    environ = os.environ if environ is None else environ
-    wanted = environ.get(THREADS.override, "").strip()
-    if not wanted:
-        return THREADS.value
-    return None if wanted.lower() == NATIVE else wanted
+    named = _named(THREADS, os.environ if environ is None else environ)
+    return THREADS.value if named == "" else named
 
 
 def apply(environ=None) -> dict:
