@@ -30,6 +30,7 @@ from numba import njit
 
 from impact.engine.bundles import (
     BuildingArrays,
+    ClearStep,
     ConfigCache,
     Events,
     InstantScratch,
@@ -40,6 +41,7 @@ from impact.engine.bundles import (
     SceneArrays,
     Segment,
     SegmentWork,
+    SpringArrays,
     StepTables,
     Tables,
     UnitArrays,
@@ -1401,16 +1403,82 @@ def _instant_scratch(w, ws, out):
 
 
 @njit(cache=True)
-def _segment_work(ws, st, out, cache, load_vec):
+def _lent(arr):
+    """An optional array (fric, harm, record) borrowed, or None."""
+    if arr is None:
+        return None
+    return borrowed(arr)
+
+
+@njit(cache=True)
+def _lent_springs(springs):
+    """The units' springs (bundles.SpringArrays) borrowed, or None."""
+    if springs is None:
+        return None
+    return SpringArrays(borrowed(springs.stiffness), borrowed(springs.damping))
+
+
+@njit(cache=True)
+def _lent_storeys(yld):
+    """A yielding building's storey table borrowed, or None for an elastic one."""
+    if yld is None:
+        return None
+    return borrowed_storeys(yld)
+
+
+@njit(cache=True)
+def borrowed_clear(clear):
+    """A scene's clear-step tables (bundles.ClearStep), every array borrowed (bundles.borrowed)."""
+    b = borrowed
+    return ClearStep(b(clear.masks), b(clear.flow), b(clear.work), b(clear.visc), b(clear.square), b(clear.part),
+                     b(clear.inv), b(clear.inv_size), b(clear.ends), b(clear.bound), b(clear.load), b(clear.half),
+                     b(clear.twin))
+
+
+@njit(cache=True)
+def _clear_scratch(clear, nfull, nmon, yld):
+    """What clear_steps works in (its `scratch`), allocated once per run; empty arrays without a clear step."""
+    if clear is None:
+        return (np.empty(0), np.empty(0), np.empty(0), np.empty(0), np.empty(0), np.empty(0), np.empty(0))
+    n2 = 2 * nfull
+    nband = clear.half.shape[0] + (yld.branch.shape[0] if yld is not None else 0)
+    return (np.empty(clear.flow.shape[1]), np.empty(n2), np.empty(n2),
+            np.empty(n2 + clear.inv.shape[0] // clear.masks.shape[0]), np.empty(2 * nmon), np.empty(nband),
+            np.empty(nband))
+
+
+@njit(cache=True)
+def _borrowed_cache(cache):
+    """The configuration cache (bundles.ConfigCache), every array borrowed."""
+    b = borrowed
+    return ConfigCache(b(cache.key), b(cache.size), b(cache.lam), b(cache.vec), b(cache.vinv), b(cache.kinv),
+                       b(cache.damping), b(cache.dof), b(cache.load), b(cache.forced), b(cache.mass))
+
+
+@njit(cache=True)
+def _borrowed_modal(mtab):
+    """The modal tables (bundles.ModalTables), every array borrowed."""
+    b = borrowed
+    return ModalTables(b(mtab.key), b(mtab.gvis), b(mtab.lmod), b(mtab.mvec), b(mtab.mbnd), b(mtab.reach))
+
+
+@njit(cache=True)
+def _borrowed_steps(dtab):
+    """A record step's tables (bundles.StepTables), every array borrowed."""
+    b = borrowed
+    return StepTables(b(dtab.key), b(dtab.ek), b(dtab.pair), b(dtab.single), b(dtab.ramp))
+
+
+@njit(cache=True)
+def _segment_work(ws, st, out, cache, load_vec, keep):
     """The SegmentWork of a run: its workspace, state, outputs, cache and load vector, every array borrowed
     (bundles.borrowed: reading a borrowed array counts no reference).  It holds the workspace and the state as
     its owner; the outputs, the cache and the load vector are run_scene's arguments, which its caller holds."""
     b = borrowed
     seg, rows, vecs, ev = ws.seg, ws.rows, ws.vecs, ws.events
     mtab, work = ws.tables.modal, ws.tables.work
-    cache_b = ConfigCache(b(cache.key), b(cache.size), b(cache.lam), b(cache.vec), b(cache.vinv), b(cache.kinv),
-                          b(cache.damping), b(cache.dof), b(cache.load), b(cache.forced), b(cache.mass))
-    mtab_b = ModalTables(b(mtab.key), b(mtab.gvis), b(mtab.lmod), b(mtab.mvec), b(mtab.mbnd), b(mtab.reach))
+    cache_b = _borrowed_cache(cache)
+    mtab_b = _borrowed_modal(mtab)
     return SegmentWork(b(seg.kap), b(seg.C), b(seg.P), b(seg.ek), b(seg.pair), b(seg.single), b(seg.ramp), b(seg.kpow),
                        b(rows.cs), b(rows.ps), b(rows.cq), b(rows.pq), b(rows.cm), b(rows.pm), b(rows.cv), b(rows.pv),
                        b(rows.cu), b(rows.pu), b(vecs.stack), b(vecs.found), b(vecs.reduced), b(vecs.moduli),
@@ -1418,7 +1486,7 @@ def _segment_work(ws, st, out, cache, load_vec):
                        b(st.escape), b(st.escape_v), b(st.q), b(st.v), b(out.diag), b(out.peak), b(out.peak_t),
                        b(out.x2), b(out.roundoff), cache_b.size, cache_b.lam, cache_b.vec, cache_b.vinv, cache_b.kinv,
                        cache_b.damping, cache_b.dof, cache_b.load, cache_b.forced, cache_b.mass, mtab_b.gvis,
-                       mtab_b.lmod, mtab_b.mvec, mtab_b.mbnd, mtab_b.reach, b(work[0]), b(work[1]), (ws, st))
+                       mtab_b.lmod, mtab_b.mvec, mtab_b.mbnd, mtab_b.reach, b(work[0]), b(work[1]), (ws, st, keep))
 
 
 @njit(cache=True)
@@ -1442,21 +1510,30 @@ def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out)
     st = RunState(start.mode.copy(), start.side.copy(), np.zeros(nu, dtype=np.int64), np.zeros(nu),
                   np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64),
                   start.q.copy(), start.v.copy())
+    clear_owned = _clear_scratch(clear, nf + nu, monitors.kind.shape[0], yld)
     # the steps inlined on every segment take one structref of the arrays they work in (impact.engine.bundles)
-    w = _segment_work(ws, st, out, cache, load_vec)
-    kap, C, P, ek, pair, single, ramp, kpow = ws.seg
-    _, _, qs, vs, _, _, aw, _, wt = ws.vecs
-    mtab, dtab, work, cursor = ws.tables
-    mode, escape, escape_v = st.mode, st.escape, st.escape_v
-    q, v = st.q, st.v
-    diag, ts, samples = out.diag, out.ts, out.samples
+    w = _segment_work(ws, st, out, cache, load_vec, clear_owned)
+    # and the loop binds every array it hands a step borrowed (bundles.borrowed; w holds the owners, the caller
+    # the arguments): bound as they are, each costs an atomic reference count at every step they are handed to
+    b = borrowed
+    kap, C, P, ek, pair, single, ramp, kpow = w.kap, w.C, w.P, w.ek, w.pair, w.single, w.ramp, w.kpow
+    qs, vs, aw, wt = b(ws.vecs.qs), b(ws.vecs.vs), w.aw, w.wt
+    mtab, dtab = _borrowed_modal(ws.tables.modal), _borrowed_steps(ws.tables.step)
+    wc, cursor = w.wc, b(ws.tables.cursor)  # the segment's modal amplitudes are wc[2n:4n] (build_segment)
+    cache = _borrowed_cache(cache)
+    st_b = borrowed_state(st)
+    mode, escape, escape_v = st_b.mode, st_b.escape, st_b.escape_v
+    q, v = st_b.q, st_b.v
+    diag, ts, samples = w.diag, b(out.ts), b(out.samples)
+    peaks = (w.mon_peak, w.mon_peak_t, monitors.cap, w.mon_x2)
+    springs_b, fric_b, harm_b, record_b = _lent_springs(springs), _lent(fric), _lent(harm), _lent(record)
+    yld_b = _lent_storeys(yld)
     # the compiled steps at an event's instant take the state and their scratch borrowed too (w holds the owners)
     instant = _instant_scratch(w, ws, out)
-    st_b = borrowed_state(st)
     t = p[P_T0]
     t_end = p[P_TEND]
     t_square = p[P_TWIN] if p[P_WINDOW] != 0.0 else np.inf  # where the roof's square starts: never if unread
-    _start(t, model, springs, fric, harm, record, yld, st_b, instant, out)
+    _start(t, model, springs_b, fric_b, harm_b, record_b, yld_b, st_b, instant, out)
     its = 0  # the next sample time
     while its < ts.shape[0] and ts[its] < t:
         its += 1
@@ -1472,20 +1549,18 @@ def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out)
     always_from_itself = yld is not None and p[P_FROM_ITSELF] != 0.0  # else only while a storey yields
     omega = p[P_OMEGA]
     if clear is not None:
-        n2 = 2 * (nf + nu)
-        nmon = monitors.kind.shape[0]
-        nband = clear.half.shape[0] + (yld.branch.shape[0] if yld is not None else 0)
-        clear_scratch = (np.empty(clear.flow.shape[1]), np.empty(n2), np.empty(n2),
-                         np.empty(n2 + clear.inv.shape[0] // clear.masks.shape[0]), np.empty(2 * nmon),
-                         np.empty(nband), np.empty(nband))
+        clear_b = borrowed_clear(clear)
+        clear_scratch = (b(clear_owned[0]), b(clear_owned[1]), b(clear_owned[2]), b(clear_owned[3]),
+                         b(clear_owned[4]), b(clear_owned[5]), b(clear_owned[6]))
     while t < t_end:
         if clear is not None and _all_free(mode, escape) and _storeys_settled(yld):
-            t = clear_steps(clear, clear_scratch, (q, v, diag), (out.peak, out.peak_t, monitors.cap, out.x2), (p, record),
-                            (t, t_end, t_square, ts[its] if its < ts.shape[0] else np.inf), building, units, springs, yld)
+            t = clear_steps(clear_b, clear_scratch, (q, v, diag), peaks, (p, record_b),
+                            (t, t_end, t_square, ts[its] if its < ts.shape[0] else np.inf), building, units,
+                            springs_b, yld_b)
         r0, r1, theta0, t_next, tau_max = segment_load(p, record, harm, t, t_end)
         key = scene_key(mode, yld)
         if key != slot_key:
-            s = config_slot(building, units, springs, yld, load_vec, omega if harm is not None else 0.0, mode, cache,
+            s = config_slot(building, units, springs_b, yld_b, load_vec, omega if harm is not None else 0.0, mode, cache,
                             cursor)
             if yld is not None:
                 rate = growth_rate(cache, s)
@@ -1509,7 +1584,6 @@ def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out)
             tab_tau = tau_max
         diag[D_SEGMENTS] += 1.0
         n = cache.size[s]
-        wc = work[1]  # the segment's modal amplitudes are wc[2n:4n] (build_segment)
         amplitude_moduli(n, wc, aw)
         best = search_constraints(w, s, units, springs, fric, yld, tau_max, (r0, r1),
                                   tab_tau if key == tab_key else -1.0, harm is not None)
@@ -1552,7 +1626,7 @@ def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out)
             diag[D_CAP] = stop
             name_stop(tau, ws.events, nu, diag)
             break
-        handle_events(t, tau, model, springs, fric, harm, record, yld, st_b, instant)
+        handle_events(t, tau, model, springs_b, fric_b, harm_b, record_b, yld_b, st_b, instant)
         if diag[D_COLLAPSE] != 0.0:
             break
         slot_key = -1  # settle may have filled (and so replaced) cache slots
