@@ -183,8 +183,8 @@ def borrowed(typingctx, arr):
     bare building those counts were 75 % of the scene loop's time (about 130 pairs per segment, found with
     gdb on NRT_incref).  A borrowed view's counts test a null pointer and return.  It is safe while its owner
     lives: numba frees an array after its owner's last use, not at the end of the function, so whatever holds
-    borrowed views holds their owner too (SegmentWork's `owner`: the run's workspace and state, which no step
-    reads), or borrows from the function's arguments, which its caller holds.
+    borrowed views holds their owner too (SegmentWork's `owner`: the run's workspace, state and clear-step
+    scratch, which no step reads), or borrows from the function's arguments, which its caller holds.
     """
     if not isinstance(arr, types.Array):
         return None

@@ -1472,8 +1472,9 @@ def _borrowed_steps(dtab):
 @njit(cache=True)
 def _segment_work(ws, st, out, cache, load_vec, keep):
     """The SegmentWork of a run: its workspace, state, outputs, cache and load vector, every array borrowed
-    (bundles.borrowed: reading a borrowed array counts no reference).  It holds the workspace and the state as
-    its owner; the outputs, the cache and the load vector are run_scene's arguments, which its caller holds."""
+    (bundles.borrowed: reading a borrowed array counts no reference).  It holds the workspace, the state and
+    `keep` (the clear step's scratch, which run_scene borrows) as its owner; the outputs, the cache and the load
+    vector are run_scene's arguments, which its caller holds."""
     b = borrowed
     seg, rows, vecs, ev = ws.seg, ws.rows, ws.vecs, ws.events
     mtab, work = ws.tables.modal, ws.tables.work
