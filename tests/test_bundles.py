@@ -87,3 +87,25 @@ def test_a_borrowed_view_is_its_owners_memory():
         shape, strides, total = write_through(a, 1, 100.0)
         assert (shape, strides) == (a.shape, a.strides)
         assert a.flat[1] == 100.0 and total == a.sum()
+
+
+def test_a_borrowed_bundle_is_the_same_bundle_of_its_owners_memory():
+    """bundles.borrowed of a bundle: every array of it, nested bundles too, a view of its owner (writes reach it),
+    numbers kept, and None stays None, so the scene loop borrows a bundle or an absent optional part in one call."""
+    from numba import njit
+
+    @njit
+    def write_through(scene, absent, pair):
+        s, none, p = bundles.borrowed(scene), bundles.borrowed(absent), bundles.borrowed(pair)
+        s.building.stiffness[0, 1] = 5.0
+        s.units.gap[1] = 7.0
+        p[0][2] = 9.0
+        return s.p.sum(), s.units.kind.sum(), none is None, p[1]
+
+    units = bundles.UnitArrays(*(np.full(2, float(i)) for i in range(6)))
+    scene = bundles.SceneArrays(np.arange(3.0), bundles.BuildingArrays(np.ones(2), np.eye(2), np.eye(2)), units,
+                                np.ones(2), bundles.MonitorArrays(np.ones((1, 2)), np.zeros(1, dtype=np.int64),
+                                                                  np.ones(1), np.ones(1)))
+    pair = (np.zeros(3), 4)
+    assert write_through(scene, None, pair) == (3.0, 0.0, True, 4)
+    assert scene.building.stiffness[0, 1] == 5.0 and units.gap[1] == 7.0 and pair[0][2] == 9.0

@@ -32,8 +32,8 @@ def verify_archive(args) -> dict:
 
 def compile_kernels(args) -> dict:
     """Compile every kernel the study runs into numba's on-disk cache, once (make setup runs it): each
-    specialisation of the scene loop on elastic buildings, the paper loop for each damper and its dense output, the
-    virtual test rig."""
+    specialisation of the scene loop the study runs (scenes.compile_scene_loops), the paper loop for each damper and
+    its dense output, the virtual test rig."""
     start = time.perf_counter()
     compile_scene_loops()
     for kind in kinds_with("paper"):

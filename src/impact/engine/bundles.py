@@ -174,9 +174,36 @@ structref.define_proxy(SegmentWork, SegmentWorkType, SEGMENT_WORK_FIELDS)
 
 
 
+def _borrowable(typ):
+    """Whether `borrowed` takes this type: an array, None, a number, or a tuple (named or not) of these."""
+    if isinstance(typ, types.BaseTuple):
+        return all(_borrowable(t) for t in typ.types)
+    return isinstance(typ, (types.Array, types.NoneType, types.Number, types.Boolean))
+
+
+def _borrow_value(context, builder, typ, value):
+    """The value with every array in it replaced by a view without a meminfo (tuples rebuilt as their own type)."""
+    if isinstance(typ, types.BaseTuple):
+        parts = [_borrow_value(context, builder, t, builder.extract_value(value, i)) for i, t in enumerate(typ.types)]
+        return context.make_tuple(builder, typ, parts)
+    if not isinstance(typ, types.Array):
+        return value  # None or a number: nothing counted
+    src = context.make_array(typ)(context, builder, value=value)
+    out = context.make_array(typ)(context, builder)
+    out.meminfo = cgutils.get_null_value(out.meminfo.type)
+    out.parent = cgutils.get_null_value(out.parent.type)
+    out.nitems = src.nitems
+    out.itemsize = src.itemsize
+    out.data = src.data
+    out.shape = src.shape
+    out.strides = src.strides
+    return out._getvalue()
+
+
 @intrinsic
 def borrowed(typingctx, arr):
-    """A view of the array that holds no reference to its memory: the same data, shape and strides, no meminfo.
+    """A view of the array that holds no reference to its memory: the same data, shape and strides, no meminfo;
+    of a bundle (a namedtuple or tuple of arrays, nested or not), the same bundle of such views; of None, None.
 
     numba counts a reference, atomically, each time a step reads an array out of a structref or binds one to an
     inlined step's argument, and its pruning pass removes only the counts it can pair within simple blocks: on a
@@ -184,21 +211,13 @@ def borrowed(typingctx, arr):
     gdb on NRT_incref).  A borrowed view's counts test a null pointer and return.  It is safe while its owner
     lives: numba frees an array after its owner's last use, not at the end of the function, so whatever holds
     borrowed views holds their owner too (SegmentWork's `owner`: the run's workspace, state and clear-step
-    scratch, which no step reads), or borrows from the function's arguments, which its caller holds.
+    scratch, which no step reads), or borrows from the function's arguments, which its caller holds.  An
+    optional part of a scene (None when the scene lacks it) is borrowed by the same call, and stays None.
     """
-    if not isinstance(arr, types.Array):
+    if not _borrowable(arr):
         return None
 
     def codegen(context, builder, sig, args):
-        src = context.make_array(arr)(context, builder, value=args[0])
-        out = context.make_array(arr)(context, builder)
-        out.meminfo = cgutils.get_null_value(out.meminfo.type)
-        out.parent = cgutils.get_null_value(out.parent.type)
-        out.nitems = src.nitems
-        out.itemsize = src.itemsize
-        out.data = src.data
-        out.shape = src.shape
-        out.strides = src.strides
-        return out._getvalue()
+        return _borrow_value(context, builder, arr, args[0])
 
     return arr(arr), codegen

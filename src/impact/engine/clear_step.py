@@ -454,10 +454,10 @@ def _bands(half, yld, u, lo, hi):
                 u[n2 + 2 + i] = -yld.branch[i] * yld.yield_drift[i]
 
 
-# _within_bands, _keep_yielding and _within_peaks are called, not inlined: inlined, their arrays' reference counts
-# (each an atomic add) were kept on every step, since numba prunes them only across simple control flow, and took
-# half of a bare building's clear steps (0.98 against 0.45 ms for the 1-storey bare run, measured 2026-12-01)
-@njit(cache=True)
+# _within_bands, _keep_yielding and _within_peaks are inlined: run_scene hands clear_steps its tables and scratch
+# borrowed (bundles.borrowed), whose reference counts test a null pointer.  Handed owned arrays, inlined, they kept
+# an atomic count on every step and took half of a bare building's clear steps (0.98 against 0.45 ms, 2026-12-01)
+@njit(cache=True, inline="always")
 def _within_bands(ends, bound, load, u, nxt, reach_of, step, lo, hi):
     """Whether every band row (the table's rows from step's first on) provably stays inside its band over the
     step, by the margin of the band and of the positions the row is the difference of; step: (the first row, f(0),
@@ -478,7 +478,7 @@ def _within_bands(ends, bound, load, u, nxt, reach_of, step, lo, hi):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _keep_yielding(ends, bound, load, yld, u, nxt, reach_of, step):
     """Whether every yielding storey's drift velocity (the table's rows from step's first on) provably keeps the
     branch's sign over the step: it does not unload within it.  step: (the first row, f(0), f at the end, f', the
@@ -500,7 +500,7 @@ def _keep_yielding(ends, bound, load, yld, u, nxt, reach_of, step):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _within_peaks(ends, bound, load, u, nxt, reach_of, step, peak, cap, marks):
     """Whether every monitor (the table's rows from step's first on, their slopes' after them) provably stays
     within its running peak over the step or keeps its slope's sign (its new peak then at an end, written into

@@ -29,25 +29,16 @@ import numpy as np
 from numba import njit
 
 from impact.engine.bundles import (
-    BuildingArrays,
-    ClearStep,
-    ConfigCache,
     Events,
     InstantScratch,
-    ModalTables,
-    MonitorArrays,
     Rows,
     RunState,
-    SceneArrays,
     Segment,
     SegmentWork,
-    SpringArrays,
     StepTables,
     Tables,
-    UnitArrays,
     Vectors,
     Workspace,
-    YieldArrays,
     borrowed,
 )
 from impact.engine.clear_step import clear_steps
@@ -444,7 +435,7 @@ def search_constraints(w, s, units, springs, fric, yld, tau_max, ramp, ek_tau, h
     for j in range(nu):
         best = _search_unit(w, nf, j, units, springs, fric, r0, r1, best, ek_tau)
     if yld is not None:
-        law = borrowed_storeys(yld)  # bound to each storey's step: borrowed, its arrays count no references
+        law = borrowed(yld)  # bound to each storey's step: borrowed, its arrays count no references
         for i in range(law.branch.shape[0]):
             best = _search_storey(w, s, law, i, nu + i, best, ek_tau, harmonic)
     found = np.inf
@@ -1365,74 +1356,10 @@ def _start(t, model, springs, fric, harm, record, yld, st, scratch, out):
 
 
 @njit(cache=True)
-def borrowed_model(model):
-    """The scene's arrays, borrowed (bundles.borrowed): binding a bundle to an inlined step's argument counts a
-    reference for each array it holds, and the run's steps bind the building, the units and the monitors on
-    every segment."""
-    b = borrowed
-    p, building, units, load_vec, monitors = model
-    return SceneArrays(b(p), BuildingArrays(b(building.mass), b(building.stiffness), b(building.damping)),
-                       UnitArrays(b(units.kind), b(units.floor), b(units.mass), b(units.load), b(units.gap),
-                                  b(units.restitution)), b(load_vec),
-                       MonitorArrays(b(monitors.rows), b(monitors.kind), b(monitors.record_coef), b(monitors.cap)))
-
-
-@njit(cache=True, inline='always')
-def borrowed_storeys(yld):
-    """A yielding building's storey table (bundles.YieldArrays), every array borrowed (bundles.borrowed)."""
-    b = borrowed
-    return YieldArrays(b(yld.stiffness), b(yld.hardening), b(yld.yield_drift), b(yld.geometric), b(yld.limit),
-                       b(yld.branch), b(yld.offset), b(yld.escape), b(yld.escape_v), b(yld.plastic), b(yld.yields))
-
-
-@njit(cache=True)
-def borrowed_state(st):
-    """The run's state, every array borrowed (bundles.borrowed)."""
-    b = borrowed
-    return RunState(b(st.mode), b(st.side), b(st.sigma), b(st.offset), b(st.escape), b(st.escape_v), b(st.check),
-                    b(st.q), b(st.v))
-
-
-@njit(cache=True)
 def _instant_scratch(w, ws, out):
-    """What the steps at an event's instant work in (bundles.InstantScratch), its arrays borrowed."""
-    b = borrowed
-    ev = ws.events
-    events = Events(b(ev.t), b(ev.side), b(ev.kind), b(ev.hit), b(ev.impulse), b(ev.touched), b(ev.floors_done))
-    return InstantScratch(w, b(ws.tables.cursor), events, b(ws.vecs.v_before), b(out.recs), b(out.diag))
-
-
-@njit(cache=True)
-def _lent(arr):
-    """An optional array (fric, harm, record) borrowed, or None."""
-    if arr is None:
-        return None
-    return borrowed(arr)
-
-
-@njit(cache=True)
-def _lent_springs(springs):
-    """The units' springs (bundles.SpringArrays) borrowed, or None."""
-    if springs is None:
-        return None
-    return SpringArrays(borrowed(springs.stiffness), borrowed(springs.damping))
-
-
-@njit(cache=True)
-def _lent_storeys(yld):
-    """A yielding building's storey table borrowed, or None for an elastic one."""
-    if yld is None:
-        return None
-    return borrowed_storeys(yld)
-
-
-@njit(cache=True)
-def borrowed_clear(clear):
-    """A scene's clear-step tables (bundles.ClearStep), every array borrowed (bundles.borrowed)."""
-    b = borrowed
-    return ClearStep(b(clear.masks), b(clear.flow), b(clear.work), b(clear.visc), b(clear.square), b(clear.part),
-                     b(clear.inv), b(clear.inv_size), b(clear.ends), b(clear.bound), b(clear.load), b(clear.half),
-                     b(clear.twin))
+    """What the steps at an event's instant work in (bundles.InstantScratch), from the borrowed workspace and
+    outputs."""
+    return InstantScratch(w, ws.tables.cursor, ws.events, ws.vecs.v_before, out.recs, out.diag)
 
 
 @njit(cache=True)
@@ -1448,46 +1375,20 @@ def _clear_scratch(clear, nfull, nmon, yld):
 
 
 @njit(cache=True)
-def _borrowed_cache(cache):
-    """The configuration cache (bundles.ConfigCache), every array borrowed."""
-    b = borrowed
-    return ConfigCache(b(cache.key), b(cache.size), b(cache.lam), b(cache.vec), b(cache.vinv), b(cache.kinv),
-                       b(cache.damping), b(cache.dof), b(cache.load), b(cache.forced), b(cache.mass))
-
-
-@njit(cache=True)
-def _borrowed_modal(mtab):
-    """The modal tables (bundles.ModalTables), every array borrowed."""
-    b = borrowed
-    return ModalTables(b(mtab.key), b(mtab.gvis), b(mtab.lmod), b(mtab.mvec), b(mtab.mbnd), b(mtab.reach))
-
-
-@njit(cache=True)
-def _borrowed_steps(dtab):
-    """A record step's tables (bundles.StepTables), every array borrowed."""
-    b = borrowed
-    return StepTables(b(dtab.key), b(dtab.ek), b(dtab.pair), b(dtab.single), b(dtab.ramp))
-
-
-@njit(cache=True)
-def _segment_work(ws, st, out, cache, load_vec, keep):
-    """The SegmentWork of a run: its workspace, state, outputs, cache and load vector, every array borrowed
-    (bundles.borrowed: reading a borrowed array counts no reference).  It holds the workspace, the state and
-    `keep` (the clear step's scratch, which run_scene borrows) as its owner; the outputs, the cache and the load
-    vector are run_scene's arguments, which its caller holds."""
-    b = borrowed
-    seg, rows, vecs, ev = ws.seg, ws.rows, ws.vecs, ws.events
-    mtab, work = ws.tables.modal, ws.tables.work
-    cache_b = _borrowed_cache(cache)
-    mtab_b = _borrowed_modal(mtab)
-    return SegmentWork(b(seg.kap), b(seg.C), b(seg.P), b(seg.ek), b(seg.pair), b(seg.single), b(seg.ramp), b(seg.kpow),
-                       b(rows.cs), b(rows.ps), b(rows.cq), b(rows.pq), b(rows.cm), b(rows.pm), b(rows.cv), b(rows.pv),
-                       b(rows.cu), b(rows.pu), b(vecs.stack), b(vecs.found), b(vecs.reduced), b(vecs.moduli),
-                       b(vecs.s_before), b(vecs.wt), b(ev.t), b(ev.side), b(ev.kind), cache_b, b(load_vec), b(st.mode), b(st.side), b(st.sigma), b(st.offset),
-                       b(st.escape), b(st.escape_v), b(st.q), b(st.v), b(out.diag), b(out.peak), b(out.peak_t),
-                       b(out.x2), b(out.roundoff), cache_b.size, cache_b.lam, cache_b.vec, cache_b.vinv, cache_b.kinv,
-                       cache_b.damping, cache_b.dof, cache_b.load, cache_b.forced, cache_b.mass, mtab_b.gvis,
-                       mtab_b.lmod, mtab_b.mvec, mtab_b.mbnd, mtab_b.reach, b(work[0]), b(work[1]), (ws, st, keep))
+def _segment_work(ws, st, out, cache, load_vec, owner):
+    """The SegmentWork of a run, from its borrowed workspace, state, outputs, cache and load vector (reading a
+    borrowed array counts no reference).  `owner` holds what the views are of and the caller does not (the
+    workspace, the state and the clear step's scratch); the outputs, the cache and the load vector are
+    run_scene's arguments, which its caller holds."""
+    seg, rows, vecs, ev, mtab, work = ws.seg, ws.rows, ws.vecs, ws.events, ws.tables.modal, ws.tables.work
+    return SegmentWork(seg.kap, seg.C, seg.P, seg.ek, seg.pair, seg.single, seg.ramp, seg.kpow,
+                       rows.cs, rows.ps, rows.cq, rows.pq, rows.cm, rows.pm, rows.cv, rows.pv, rows.cu, rows.pu,
+                       vecs.stack, vecs.found, vecs.reduced, vecs.moduli, vecs.s_before, vecs.wt,
+                       ev.t, ev.side, ev.kind, cache, load_vec, st.mode, st.side, st.sigma, st.offset,
+                       st.escape, st.escape_v, st.q, st.v, out.diag, out.peak, out.peak_t, out.x2, out.roundoff,
+                       cache.size, cache.lam, cache.vec, cache.vinv, cache.kinv, cache.damping, cache.dof,
+                       cache.load, cache.forced, cache.mass, mtab.gvis, mtab.lmod, mtab.mvec, mtab.mbnd, mtab.reach,
+                       work[0], work[1], owner)
 
 
 @njit(cache=True)
@@ -1501,7 +1402,7 @@ def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out)
     the run advances from where it is and leaves as its result; clear: a bundles.ClearStep for a scene whose whole
     record steps may be taken by matrices (clear_step; None: every step by the segment's rows).
     """
-    model = borrowed_model(model)
+    model = borrowed(model)
     p, building, units, load_vec, monitors = model
     nf = building.mass.shape[0]
     nu = units.mass.shape[0]
@@ -1512,25 +1413,26 @@ def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out)
                   np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64), np.zeros(nu, dtype=np.int64),
                   start.q.copy(), start.v.copy())
     clear_owned = _clear_scratch(clear, nf + nu, monitors.kind.shape[0], yld)
+    # the loop binds every array it hands a step borrowed (bundles.borrowed): bound as they are, each costs an
+    # atomic reference count at every step they are handed to.  The SegmentWork holds what run_scene owns
+    # (the workspace, the state, the clear step's scratch); the caller holds the arguments
+    ws_b, st_b, out_b, cache = borrowed(ws), borrowed(st), borrowed(out), borrowed(cache)
     # the steps inlined on every segment take one structref of the arrays they work in (impact.engine.bundles)
-    w = _segment_work(ws, st, out, cache, load_vec, clear_owned)
-    # and the loop binds every array it hands a step borrowed (bundles.borrowed; w holds the owners, the caller
-    # the arguments): bound as they are, each costs an atomic reference count at every step they are handed to
-    b = borrowed
-    kap, C, P, ek, pair, single, ramp, kpow = w.kap, w.C, w.P, w.ek, w.pair, w.single, w.ramp, w.kpow
-    qs, vs, aw, wt = b(ws.vecs.qs), b(ws.vecs.vs), w.aw, w.wt
-    mtab, dtab = _borrowed_modal(ws.tables.modal), _borrowed_steps(ws.tables.step)
-    wc, cursor = w.wc, b(ws.tables.cursor)  # the segment's modal amplitudes are wc[2n:4n] (build_segment)
-    cache = _borrowed_cache(cache)
-    st_b = borrowed_state(st)
+    w = _segment_work(ws_b, st_b, out_b, cache, load_vec, (ws, st, clear_owned))
+    kap, C, P, ek, pair, single, ramp, kpow = ws_b.seg
+    qs, vs, aw, wt = ws_b.vecs.qs, ws_b.vecs.vs, w.aw, w.wt
+    mtab, dtab, cursor = ws_b.tables.modal, ws_b.tables.step, ws_b.tables.cursor
+    wc = w.wc  # the segment's modal amplitudes are wc[2n:4n] (build_segment)
     mode, escape, escape_v = st_b.mode, st_b.escape, st_b.escape_v
     q, v = st_b.q, st_b.v
-    diag, ts, samples = w.diag, b(out.ts), b(out.samples)
-    peaks = (w.mon_peak, w.mon_peak_t, monitors.cap, w.mon_x2)
-    springs_b, fric_b, harm_b, record_b = _lent_springs(springs), _lent(fric), _lent(harm), _lent(record)
-    yld_b = _lent_storeys(yld)
-    # the compiled steps at an event's instant take the state and their scratch borrowed too (w holds the owners)
-    instant = _instant_scratch(w, ws, out)
+    diag, ts, samples = out_b.diag, out_b.ts, out_b.samples
+    peaks = (out_b.peak, out_b.peak_t, monitors.cap, out_b.x2)
+    # the optional parts, borrowed to the compiled steps (None stays None); the inlined steps take the run's own
+    # arguments, because numba prunes a branch on `is None` only on a function's own argument
+    springs_b, fric_b, harm_b, record_b, yld_b = borrowed(springs), borrowed(fric), borrowed(harm), \
+        borrowed(record), borrowed(yld)
+    # the compiled steps at an event's instant take the state and their scratch borrowed too
+    instant = _instant_scratch(w, ws_b, out_b)
     t = p[P_T0]
     t_end = p[P_TEND]
     t_square = p[P_TWIN] if p[P_WINDOW] != 0.0 else np.inf  # where the roof's square starts: never if unread
@@ -1550,9 +1452,7 @@ def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out)
     always_from_itself = yld is not None and p[P_FROM_ITSELF] != 0.0  # else only while a storey yields
     omega = p[P_OMEGA]
     if clear is not None:
-        clear_b = borrowed_clear(clear)
-        clear_scratch = (b(clear_owned[0]), b(clear_owned[1]), b(clear_owned[2]), b(clear_owned[3]),
-                         b(clear_owned[4]), b(clear_owned[5]), b(clear_owned[6]))
+        clear_b, clear_scratch = borrowed(clear), borrowed(clear_owned)
     while t < t_end:
         if clear is not None and _all_free(mode, escape) and _storeys_settled(yld):
             t = clear_steps(clear_b, clear_scratch, (q, v, diag), peaks, (p, record_b),

@@ -485,15 +485,19 @@ def amplitude(result: SceneResult) -> float:
 
 
 def compile_scene_loops(yielding: tuple[bool, ...] = (False,)) -> None:
-    """Compile every specialisation of the scene loop (OPTIONAL_PARTS: with and without pendulums, friction, a
-    harmonic load, and each of `yielding`) into numba's cache, by one short run of each."""
+    """Compile the specialisations of the scene loop the study runs into numba's cache, by one short run of each:
+    on elastic buildings every one (OPTIONAL_PARTS: with and without pendulums, friction, a harmonic load), on
+    yielding ones those of the collapse stage (a record, no friction, with and without pendulums), and every one
+    of those too with `yielding` holding True (the random scene probe draws them)."""
     building = Building.uniform(1, 1.0, 0.05)
     mass = 0.02 * building.total_mass
     loads = (Harmonic(1e3, building.omega1), GroundMotion(np.array([0.0, 1.0, -1.0, 0.0]), 0.1))
     # a kind whose mass slides between walls, and one with a spring between walls: the registry's, not named here
     sliding = next(name for name, kind in KINDS.items() if kind.slides and kind.walls)
     sprung = next(name for name, kind in KINDS.items() if kind.spring and kind.walls)
-    for springs, friction, load, yields in itertools.product((False, True), (False, True), loads, yielding):
+    every = itertools.product((False, True), (False, True), loads, yielding)
+    collapse = () if True in yielding else itertools.product((False, True), (False,), loads[1:], (True,))
+    for springs, friction, load, yields in itertools.chain(every, collapse):
         dampers = [Damper(sliding, mass, gap=0.01, e=0.5, nu=0.1 if friction else 0.0)]
         if springs:
             dampers.append(Damper(sprung, mass, gap=0.01, e=0.5))
