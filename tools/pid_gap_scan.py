@@ -1,8 +1,8 @@
 """Why the PID has no design equation: its optimum gap on a fine grid, and how well a gap law can find it.
 
 The design charts read X_m on the protocol's gap grid (0.2 apart).  This script scans PID designs on that grid and
-then, around each grid optimum, on a fine one (0.01 apart, one grid step either side), with the charts' frequency
-window and protocol (the worst over the starts, as `impact design` reads it).  It reports, per design, the grid's
+then, between the grid optimum's two neighbours, on the design equations' fine step (design.equations.refine_step,
+0.01; formulas.refined_curve), with the charts' frequency window and protocol (the worst over the starts, as `impact design` reads it).  It reports, per design, the grid's
 optimum against the fine one, and the cliff the fine scan finds below the optimum: X_m just below the optimum gap
 over X_m at it.  Then it fits a gap law to the fine optima of the rows of e that the design equations fit
 (design.equations.holdout_e held out),
@@ -30,25 +30,24 @@ import numpy as np
 import yaml
 from scipy.optimize import least_squares
 
-from impact.stages.design.equations.formulas import Point, direct_xm
+from impact.stages.design.equations.formulas import Point, direct_xm, refined_curve
 from impact.stages.sweeps import gap_grid
 
 CONFIG = Path(__file__).resolve().parents[1] / "config" / "config.yaml"
 
 
 def scan(cfg: dict, pt: Point) -> dict:
-    """The grid's optimum, then the fine scan around it."""
+    """The grid's optimum, then the refined curve around it (formulas.refined_curve, the design equations' own)."""
     coarse = gap_grid(cfg)
     xc = direct_xm(cfg, "pid", pt, coarse)
     i = int(np.nanargmin(xc))
-    step = float(coarse[1] - coarse[0])
-    fine = np.round(np.arange(max(0.01, coarse[i] - step), coarse[i] + step + 0.005, 0.01), 6)
-    xf = direct_xm(cfg, "pid", pt, fine)
+    gaps, xm = refined_curve(cfg, "pid", pt, coarse, xc)
+    window = (gaps >= coarse[max(i - 1, 0)]) & (gaps <= coarse[min(i + 1, len(coarse) - 1)])
+    fine, xf = gaps[window], np.round(xm[window], 6)  # what the output file keeps, so a refit of it is the same
     j = int(np.nanargmin(xf))
-    xc, xf = np.round(xc, 6), np.round(xf, 6)  # what the output file keeps, so a refit of it (--rows) is the same
     return {"mu": pt.mu, "e": pt.e, "beta": pt.beta, "rp": pt.rp,
-            "grid_gap": float(coarse[i]), "grid_X_m": float(xc[i]), "gap": float(fine[j]), "X_m": float(xf[j]),
-            "cliff": float(xf[j - 1] / xf[j]) if j > 0 else None,
+            "grid_gap": float(coarse[i]), "grid_X_m": float(np.round(xc[i], 6)), "gap": float(fine[j]),
+            "X_m": float(xf[j]), "cliff": float(xf[j - 1] / xf[j]) if j > 0 else None,
             "fine_gaps": fine.tolist(), "fine_X_m": xf.tolist()}
 
 

@@ -101,8 +101,8 @@ def plot_figure(fig_cfg: dict, datasets: dict, tmd: dict | None, outputs) -> Non
 
 def plot_design_equations(ds, outputs) -> None:
     """The design equations against simulation: the formula's X_m against X_m simulated at the formula's gap
-    (left), and that against the best over the gap grid (right); one marker per damper type, filled where the
-    point was held out of the fit."""
+    (left), and that against the least X_m over the gap ratios (right: the grid refined around its best); one
+    marker per damper type, filled where the point was held out of the fit."""
     fig, (left, right) = plt.subplots(1, 2, figsize=(9.0, 4.0), constrained_layout=True)
     for (kind, marker), color in zip(zip(sorted(set(ds["kind"].values)), "os^"), ("C0", "C1", "C2")):
         for held, label, fill in ((1.0, "held out", color), (0.0, "fitted", "none")):
@@ -111,7 +111,7 @@ def plot_design_equations(ds, outputs) -> None:
             left.scatter(rows["X_m_at_formula_gap"], rows["X_m_formula"], **style)
             right.scatter(rows["X_m_best"], rows["X_m_at_formula_gap"], **style)
     for ax, (x, y) in zip((left, right), (("X_m simulated at the formula's gap", "X_m by the formula"),
-                                          ("X_m at the best gap of the grid", "X_m simulated at the formula's gap"))):
+                                          ("the least X_m over the gap ratios", "X_m simulated at the formula's gap"))):
         ax.plot([0, 1], [0, 1], color="0.5", lw=0.8, label="equal")
         ax.plot([0, 1], [0, 1.1], color="0.5", lw=0.8, ls=":", label="10 % above")
         ax.set(xlabel=x, ylabel=y, xlim=(0, 1), ylim=(0, 1.1))

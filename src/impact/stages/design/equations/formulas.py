@@ -9,7 +9,8 @@ The first is an energy balance at resonance: the structure's viscous loss 2 beta
 momentum exchange, proportional to mu X^2 and to how much of each impact's momentum the restitution keeps
 from coming back (1 - e).  The second says that the damper mass crosses its gap in about half a period at
 the structure's velocity, so the best gap grows with the structure's amplitude.  a, p, s (t) and b, c (v)
-are fitted on the design charts' optima (each the worst over the starts); the rows of e held out of the fit
+are fitted on the design charts' optima (each the worst over the starts), each read again between its grid
+neighbours on a fine step (:func:`refined`: the optimum lies between the grid's gap ratios); the rows of e held out of the fit
 and the configured checks off the charts give the stated error.  A kind whose held-out error exceeds the
 configured acceptance has no published formula: :func:`evaluate` refuses it with the measured error.
 """
@@ -76,26 +77,58 @@ def formula_gap(coefs: dict, xm: float, pt: Point) -> float:
 # the fit, on the charts' optima
 # ----------------------------------------------------------------------------
 
+def _least_on_curve(gaps: np.ndarray, values: np.ndarray, plateau: float) -> dict:
+    """The least X_m over a curve of gap ratios, its gap and the plateau around it (see chart_optima)."""
+    best = int(np.nanargmin(values))
+    level = (1.0 + plateau) * values[best]
+    return {"X_m": float(values[best]), "gap_ratio": float(gaps[best]),
+            "plateau_low": _crossing(gaps, values, best, level, -1),
+            "plateau_high": _crossing(gaps, values, best, level, +1), "on_edge": best in (0, len(gaps) - 1)}
+
+
 def chart_optima(chart: xr.Dataset, plateau: float) -> list[dict]:
-    """Every (e, mu[, r']) of a chart: its best gap ratio, X_m there and the plateau around it.
+    """Every (e, mu[, r']) of a chart: its best gap ratio, X_m there and the plateau around it, on the chart's grid.
 
     The plateau's ends are where X_m, linear between the chart's gap ratios, first rises to (1 + plateau) times
     the optimum on either side (the grid's end where it does not).  Optima on the edge of the gap grid are
-    marked (`on_edge`): the true optimum may lie beyond it."""
+    marked (`on_edge`): the true optimum may lie beyond it.  `refined` reads each again between its neighbours."""
     beta = float(chart.attrs["beta"])
     gaps = chart["gap_ratio"].values
     xm = chart["X_m"]
     out = []
     for index in np.ndindex(xm.shape[:-1]):
-        values = xm.values[index]
-        best = int(np.nanargmin(values))
-        level = (1.0 + plateau) * values[best]
         params = {name: float(chart[name].values[i]) for name, i in zip(xm.dims[:-1], index)}
-        out.append({**params, "beta": beta, "rp": params.get("rp", 0.0), "X_m": float(values[best]),
-                    "gap_ratio": float(gaps[best]), "plateau_low": _crossing(gaps, values, best, level, -1),
-                    "plateau_high": _crossing(gaps, values, best, level, +1),
-                    "on_edge": best in (0, len(gaps) - 1)})
+        out.append({**params, "beta": beta, "rp": params.get("rp", 0.0),
+                    **_least_on_curve(gaps, xm.values[index], plateau), "gaps": gaps, "values": xm.values[index]})
     return out
+
+
+def refined_curve(cfg: dict, kind: str, pt: Point, gaps: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A curve of X_m over the grid's gap ratios with the stretch between its least value's two neighbours read
+    again by direct sweeps on design.equations.refine_step (that least value's own gap among them).
+
+    The optimum lies between the grid's gap ratios: a soft PID's at the edge of a cliff, where one hundredth of a
+    gap ratio lower X_m is several times higher, and the grid's best well above it, a CID's too
+    (docs/design-equations.md says by how much).  A formula is fitted on, and checked against, the optimum itself."""
+    i = int(np.nanargmin(values))
+    lo, hi = gaps[max(i - 1, 0)], gaps[min(i + 1, len(gaps) - 1)]
+    step = cfg["design"]["equations"]["refine_step"]
+    fine = np.round(np.arange(lo + step, hi - step / 2, step), 9)
+    merged_g = np.concatenate([gaps[gaps != gaps[i]], fine])
+    merged_x = np.concatenate([values[gaps != gaps[i]], direct_xm(cfg, kind, pt, fine)])
+    order = np.argsort(merged_g, kind="stable")
+    return merged_g[order], merged_x[order]
+
+
+def refined(cfg: dict, kind: str, row: dict) -> dict:
+    """A grid optimum (a chart_optima row, with its curve) read on its refined curve (refined_curve); the grid's
+    optimum is kept beside it.  An optimum on the grid's edge is left as it is (the grid does not bracket it)."""
+    out = {k: v for k, v in row.items() if k not in ("gaps", "values")}
+    if row["on_edge"]:
+        return out
+    gaps, values = refined_curve(cfg, kind, _point(row), np.asarray(row["gaps"]), np.asarray(row["values"]))
+    return {**out, **_least_on_curve(gaps, values, cfg["design"]["equations"]["plateau"]),
+            "grid_X_m": row["X_m"], "grid_gap_ratio": row["gap_ratio"]}
 
 
 def _crossing(gaps: np.ndarray, values: np.ndarray, best: int, level: float, step: int) -> float:
@@ -143,18 +176,12 @@ def fit(kind: str, rows: list[dict]) -> dict:
     return {n: coefs[n] for n in names}
 
 
-def plateau_factors(coefs: dict, rows: list[dict]) -> tuple[float, float]:
-    """(L, U): on every row, the chart's gap ratios from L g_opt to U g_opt (g_opt by the formula) kept X_m
-    within the plateau's tolerance of the optimum; L > U says the rows share no such band."""
-    low, high = [], []
-    for r in rows:
-        if r["on_edge"]:
-            continue
-        pt = _point(r)
-        g = formula_gap(coefs, formula_xm(coefs, pt), pt)
-        low.append(r["plateau_low"] / g)
-        high.append(r["plateau_high"] / g)
-    return max(low), min(high)
+def plateau_factors(rows: list[dict]) -> tuple[float, float]:
+    """(L, U): on every row, the gap ratios from L g_opt to U g_opt (g_opt the row's own optimum) kept X_m within
+    the plateau's tolerance of the optimum: the band of gaps, relative to the optimum, that every fitted design
+    tolerates (the paper's measure of insensitivity to the force's amplitude, as a bound)."""
+    rows = [r for r in rows if not r["on_edge"]]
+    return max(r["plateau_low"] / r["gap_ratio"] for r in rows), min(r["plateau_high"] / r["gap_ratio"] for r in rows)
 
 
 # ----------------------------------------------------------------------------
@@ -179,20 +206,25 @@ def direct_xm(cfg: dict, kind: str, pt: Point, gap_ratios) -> np.ndarray:
     return ds["X_m_refined"].max("start").values
 
 
-def check_point(cfg: dict, kind: str, coefs: dict, pt: Point, best: tuple[float, float] | None = None) -> dict:
-    """The formula at one held-out point against simulation: X_m at the formula's gap, and the best over the
-    gap grid (from a chart row when given as (X_m, g), else by a direct scan of the protocol's gap grid)."""
+def optimum(cfg: dict, kind: str, pt: Point) -> dict:
+    """The least X_m over the gap ratios by direct sweeps: the protocol's gap grid, then refined (see refined)."""
+    gaps = gap_grid(cfg)
+    scan = direct_xm(cfg, kind, pt, gaps)
+    row = {"mu": pt.mu, "e": pt.e, "beta": pt.beta, "rp": pt.rp, "gaps": gaps, "values": scan,
+           **_least_on_curve(gaps, scan, cfg["design"]["equations"]["plateau"])}
+    return refined(cfg, kind, row)
+
+
+def check_point(cfg: dict, kind: str, coefs: dict, pt: Point, best: dict | None = None) -> dict:
+    """The formula at one held-out point against simulation: X_m at the formula's gap, and the optimum over the
+    gap ratios (a refined chart row when given, else found by direct sweeps: optimum)."""
     xm_f = formula_xm(coefs, pt)
     g_f = formula_gap(coefs, xm_f, pt)
     xm_at_g = float(direct_xm(cfg, kind, pt, [g_f])[0])
-    if best is None:
-        gaps = gap_grid(cfg)
-        scan = direct_xm(cfg, kind, pt, gaps)
-        i = int(np.nanargmin(scan))
-        best = (float(scan[i]), float(gaps[i]))
+    best = optimum(cfg, kind, pt) if best is None else best
     return {"mu": pt.mu, "e": pt.e, "beta": pt.beta, "rp": pt.rp, "X_m_formula": xm_f, "gap_ratio_formula": g_f,
-            "X_m_at_formula_gap": xm_at_g, "X_m_best": best[0], "gap_ratio_best": best[1],
-            "error": abs(xm_f - xm_at_g) / xm_at_g, "above_optimum": xm_at_g / best[0] - 1.0}
+            "X_m_at_formula_gap": xm_at_g, "X_m_best": best["X_m"], "gap_ratio_best": best["gap_ratio"],
+            "error": abs(xm_f - xm_at_g) / xm_at_g, "above_optimum": xm_at_g / best["X_m"] - 1.0}
 
 
 def _verdict(checks: list[dict], acceptable: float) -> dict:
@@ -218,7 +250,7 @@ def study_kind(cfg: dict, kind: str, chart: xr.Dataset, stored_entry: dict | Non
     """One kind's formula: fitted on the chart's optima outside the held-out rows of e (or, where those are too
     few to determine it, the stored fit), then checked on the held-out rows and the configured points."""
     eq = cfg["design"]["equations"]
-    rows = chart_optima(chart, eq["plateau"])
+    rows = [refined(cfg, kind, row) for row in chart_optima(chart, eq["plateau"])]
     held_e = set(eq["holdout_e"])
     train = [r for r in rows if r["e"] not in held_e]
     try:
@@ -228,10 +260,9 @@ def study_kind(cfg: dict, kind: str, chart: xr.Dataset, stored_entry: dict | Non
             raise
         coefs, fitted = stored_entry["coefficients"], False
     on_chart = [(r, r["e"] in held_e) for r in rows if not r["on_edge"]]
-    checks = [check_point(cfg, kind, coefs, _point(r), best=(r["X_m"], r["gap_ratio"])) | {"held_out": held}
-              for r, held in on_chart]
+    checks = [check_point(cfg, kind, coefs, _point(r), best=r) | {"held_out": held} for r, held in on_chart]
     checks += [check_point(cfg, kind, coefs, Point(**c)) | {"held_out": True} for c in eq["checks"].get(kind, [])]
-    plateau = plateau_factors(coefs, train) if any(not r["on_edge"] for r in train) else None
+    plateau = plateau_factors(train) if any(not r["on_edge"] for r in train) else None
     entry = {"kind": kind, "coefficients": coefs, "fitted": fitted,
              "ranges": {name: list(eq["ranges"][name]) for name in inputs(kind)},
              "chart_beta": float(chart.attrs["beta"]), **_verdict(checks, eq["acceptable_error"]),
@@ -246,10 +277,10 @@ CHECK_ATTRS = {
     "X_m_formula": ("X_m by the design equation", "1"),
     "gap_ratio_formula": ("optimum gap ratio by the design equation", "1"),
     "X_m_at_formula_gap": ("X_m simulated at the formula's gap ratio, the worst over the starts", "1"),
-    "X_m_best": ("X_m at the best gap ratio of the gap grid, simulated", "1"),
-    "gap_ratio_best": ("the best gap ratio of the gap grid, simulated", "1"),
+    "X_m_best": ("the least X_m over the gap ratios, simulated (the gap grid, refined around its best)", "1"),
+    "gap_ratio_best": ("the gap ratio of the least X_m, simulated (the gap grid, refined around its best)", "1"),
     "error": ("|X_m by the formula - X_m simulated at its gap| / X_m simulated", "1"),
-    "above_optimum": ("X_m simulated at the formula's gap over the best on the gap grid, less one", "1"),
+    "above_optimum": ("X_m simulated at the formula's gap over the least X_m, less one", "1"),
     "held_out": ("whether the point was kept out of the fit (1) or fitted (0)", "1"),
 }
 
@@ -304,7 +335,7 @@ def evaluate(kind: str, pt: Point, fits: dict | None = None) -> dict:
     return {"damper": kind, "mu": pt.mu, "e": pt.e, "beta": pt.beta, **({"rp": pt.rp} if KINDS[kind].spring else {}),
             "gap_ratio": g, "X_m": xm, "error_bound": entry["error_bound"], "error_held_out_max": entry["error_max"],
             "error_held_out_p95": entry["error_p95"],
-            "plateau": [lo * g, hi * g] if lo <= hi else None, "plateau_tolerance": entry["plateau_tolerance"]}
+            "plateau": [lo * g, hi * g], "plateau_tolerance": entry["plateau_tolerance"]}
 
 
 def tmd_equations(mu: float, beta: float) -> dict:
