@@ -1,5 +1,8 @@
+import importlib.util
 import sys
 from pathlib import Path
+
+import pytest
 
 from impact import kernels
 
@@ -17,3 +20,13 @@ def pytest_sessionstart(session):
 
     with jitcache.compile_lock(fresh=(scene_loop.run_scene,)):
         pass
+
+
+@pytest.fixture(scope="module")
+def tool(request):
+    """The script tools/<name>.py that a test module names in its TOOL, loaded as a module (tools/ is no package)."""
+    path = Path(request.module.TOOL)
+    spec = importlib.util.spec_from_file_location(path.stem, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module

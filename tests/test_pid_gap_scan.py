@@ -4,7 +4,6 @@ and the docs quote it."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 
@@ -18,14 +17,6 @@ ROOT = Path(__file__).resolve().parents[1]
 TOOL = ROOT / "tools" / "pid_gap_scan.py"
 SCAN = json.loads((ROOT / "docs" / "pid_gap_scan.json").read_text())
 STUDY = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
-
-
-@pytest.fixture(scope="module")
-def tool():
-    spec = importlib.util.spec_from_file_location("pid_gap_scan", TOOL)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def test_the_summary_is_the_fit_of_the_stored_scans(tool):

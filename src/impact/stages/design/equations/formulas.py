@@ -111,8 +111,10 @@ def refined_curve(cfg: dict, kind: str, pt: Point, gaps: np.ndarray, values: np.
     gap ratio lower X_m is several times higher, and the grid's best well above it, a CID's too
     (docs/design-equations.md says by how much).  A formula is fitted on, and checked against, the optimum itself."""
     i = int(np.nanargmin(values))
-    lo, hi = gaps[max(i - 1, 0)], gaps[min(i + 1, len(gaps) - 1)]
     step = cfg["design"]["equations"]["refine_step"]
+    # one step beyond the grid where the least value is at its end, so that the fine points hold that value's gap
+    lo = gaps[i - 1] if i > 0 else gaps[i] - step
+    hi = gaps[i + 1] if i < len(gaps) - 1 else gaps[i] + step
     fine = np.round(np.arange(lo + step, hi - step / 2, step), 9)
     merged_g = np.concatenate([gaps[gaps != gaps[i]], fine])
     merged_x = np.concatenate([values[gaps != gaps[i]], direct_xm(cfg, kind, pt, fine)])
