@@ -133,32 +133,44 @@ def scene_case(name: str, scene: Scene, repeats: int, peaks=PEAK_GROUPS, window:
     return out
 
 
+def record_scenes() -> dict:
+    """The scene-core cases under El Centro: {name: (scene, the peaks certified, whether the window is read)}; the
+    exact propagator's cases run the bare buildings of the names that say "bare" (tools/engine_profile.py profiles
+    these too)."""
+    one = Building.uniform(1, 1.0, 0.02)
+    three = Building.uniform(3, 1.0, 0.02)
+    five = Building.uniform(5, 2.0, 0.02)
+    el_centro = GroundMotion.from_record(load_record("elcentro"), pga_g=0.35)
+    cid = Damper("cid", 0.02 * three.total_mass, gap=0.05, e=0.5)
+    return {
+        "1 storey, bare, El Centro 0.35 g, scene core": (Scene(one, (), el_centro), PEAK_GROUPS, True),
+        "3 storeys, bare, El Centro 0.35 g, scene core": (Scene(three, (), el_centro), PEAK_GROUPS, True),
+        "3 storeys, CID at the roof, El Centro 0.35 g": (Scene(three, (cid,), el_centro), PEAK_GROUPS, True),
+        # what the collapse stage asks of a run: the drifts' peaks alone, no window
+        "3 storeys, CID at the roof, El Centro 0.35 g, drifts alone": (Scene(three, (cid,), el_centro), ("drifts",),
+                                                                       False),
+        "3 storeys, CID in 4 units, El Centro 0.35 g": (
+            Scene(three, (Damper("cid", cid.mass, gap=0.05, e=0.5, units=4),), el_centro), PEAK_GROUPS, True),
+        "5 storeys, PID r' = 1 at the roof, El Centro 0.35 g": (
+            Scene(five, (Damper("pid", 0.02 * five.total_mass, gap=0.2, e=0.5, tuning=1.0),), el_centro),
+            PEAK_GROUPS, True),
+    }
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="fewer repeats (numbers are noisier)")
     ap.add_argument("--out", default="benchmarks/results/scene.json")
     args = ap.parse_args(argv)
     reps = 2 if args.quick else 7
-    one = Building.uniform(1, 1.0, 0.02)
-    three = Building.uniform(3, 1.0, 0.02)
-    five = Building.uniform(5, 2.0, 0.02)
-    el_centro = GroundMotion.from_record(load_record("elcentro"), pga_g=0.35)
-    cid = Damper("cid", 0.02 * three.total_mass, gap=0.05, e=0.5)
-    cases = [
-        propagator_case("1 storey, bare, El Centro 0.35 g, exact propagator", one, el_centro, reps),
-        scene_case("1 storey, bare, El Centro 0.35 g, scene core", Scene(one, (), el_centro), reps),
-        propagator_case("3 storeys, bare, El Centro 0.35 g, exact propagator", three, el_centro, reps),
-        scene_case("3 storeys, bare, El Centro 0.35 g, scene core", Scene(three, (), el_centro), reps),
-        scene_case("3 storeys, CID at the roof, El Centro 0.35 g", Scene(three, (cid,), el_centro), reps),
-        # what the collapse stage asks of a run: the drifts' peaks alone, no window
-        scene_case("3 storeys, CID at the roof, El Centro 0.35 g, drifts alone", Scene(three, (cid,), el_centro),
-                   reps, peaks=("drifts",), window=False),
-        scene_case("3 storeys, CID in 4 units, El Centro 0.35 g",
-                   Scene(three, (Damper("cid", cid.mass, gap=0.05, e=0.5, units=4),), el_centro), reps),
-        scene_case("5 storeys, PID r' = 1 at the roof, El Centro 0.35 g",
-                   Scene(five, (Damper("pid", 0.02 * five.total_mass, gap=0.2, e=0.5, tuning=1.0),), el_centro),
-                   reps),
-    ]
+    cases = []
+    scenes = record_scenes()
+    for name, (scene, peaks, window) in scenes.items():
+        if "bare" in name:  # the same building by the exact propagator first
+            size = name.split(",")[0]
+            cases.append(propagator_case(f"{size}, bare, El Centro 0.35 g, exact propagator", scene.building,
+                                         scene.load, reps))
+        cases.append(scene_case(name, scene, reps, peaks=peaks, window=window))
     # the paper's case on both kernels
     system = System.from_gap_ratio("cid", mu=0.01, beta=0.0048, e=0.25, gap_ratio=1.6)
     proto = Protocol(start="left")
@@ -175,8 +187,9 @@ def main(argv=None) -> int:
              "scene_amplitude_alone_over_specialised": alike["ms_per_run"] / (1e3 * t_old)}
     print(json.dumps(paper))
     cases += [general, alike, paper]
-    peer = opensees_case("3 storeys, bare, El Centro 0.35 g, OpenSees linear Newmark at the record's step", three,
-                         el_centro)
+    bare = scenes["3 storeys, bare, El Centro 0.35 g, scene core"][0]
+    peer = opensees_case("3 storeys, bare, El Centro 0.35 g, OpenSees linear Newmark at the record's step",
+                         bare.building, bare.load)
     cases += [peer] if peer else []
     for size in ("1 storey", "3 storeys"):
         core, exact = (next(c for c in cases if c["case"].startswith(size) and c["case"].endswith(end))

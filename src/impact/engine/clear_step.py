@@ -336,17 +336,29 @@ def _rows(generator, rows, kinds, record_coef, modes, slope=False):
 
 
 @njit(cache=True, inline="always")
-def _form(q, base, u):
-    """u^T Q u of a symmetric Q, the rows of q from base on."""
-    acc = 0.0
+def _forms(work, visc, square, base, u):
+    """u^T Q u of the three symmetric forms of a step (the work, the dissipation, the roof's square), the rows of
+    each from base on, in one pass.  Each is summed in the order it always was, so each keeps its bits: one pass
+    lets the CPU overlap the three chains of dependent adds where a pass per form waited on each in turn (the
+    forms took nearly half of a bare 3-storey building's clear step that way, 2026-12-01)."""
+    acc_w = 0.0
+    acc_v = 0.0
+    acc_s = 0.0
     for i in range(u.shape[0]):
         ui = u[i]
         if ui != 0.0:
-            row = 0.5 * q[base + i, i] * ui
+            row_w = 0.5 * work[base + i, i] * ui
+            row_v = 0.5 * visc[base + i, i] * ui
+            row_s = 0.5 * square[base + i, i] * ui
             for j in range(i + 1, u.shape[0]):
-                row += q[base + i, j] * u[j]
-            acc += ui * row
-    return 2.0 * acc
+                uj = u[j]
+                row_w += work[base + i, j] * uj
+                row_v += visc[base + i, j] * uj
+                row_s += square[base + i, j] * uj
+            acc_w += ui * row_w
+            acc_v += ui * row_v
+            acc_s += ui * row_s
+    return 2.0 * acc_w, 2.0 * acc_v, 2.0 * acc_s
 
 
 @njit(cache=True, inline="always")
@@ -590,10 +602,11 @@ def clear_steps(clear, scratch, state, peaks, load, times, building, units, spri
             if marks[nmon + m] >= 0.0:
                 peak[m] = marks[m]
                 peak_t[m] = t + marks[nmon + m]
-        diag[D_WORK] += _form(work, k * size, u)
-        diag[D_VISC] += _form(visc, k * size, u)
+        step_work, step_visc, step_square = _forms(work, visc, square, k * size, u)
+        diag[D_WORK] += step_work
+        diag[D_VISC] += step_visc
         if t_next > t_square:
-            x2[0] += _form(square, k * size, u)
+            x2[0] += step_square
         for i in range(n):
             q[i] = nxt[i]
             v[i] = nxt[n + i]
