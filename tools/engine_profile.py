@@ -19,6 +19,8 @@ import argparse
 import json
 import os
 import re
+import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -87,12 +89,17 @@ def _keep_object_code() -> dict:
 
 
 def _kernel_addresses(dispatcher, kept: dict) -> dict[int, str]:
-    """{address: symbol} of every function compiled into each loaded specialisation of the dispatcher."""
+    """{address: symbol} of every function compiled into each loaded specialisation of the dispatcher: a kernel
+    loaded from numba's cache by its object code kept as it loaded, one compiled in this process by the object
+    code numba keeps for its cache."""
     addresses = {}
     for result in dispatcher.overloads.values():
         library = result.library
         engine = library._codegen._engine
-        for name in function_symbols(kept[library.name]):
+        object_code = kept.get(library.name) or library._compiled_object
+        if object_code is None:
+            raise SystemExit(f"no object code of {library.name} to read its functions from")
+        for name in function_symbols(object_code):
             address = engine.get_function_address(name)
             if address:
                 addresses[address] = name
@@ -101,7 +108,7 @@ def _kernel_addresses(dispatcher, kept: dict) -> dict[int, str]:
 
 def profiled_process(case: str, runs: int) -> None:
     """The process perf samples: loads the case's kernel, writes its perf map, says READY, waits for a line on
-    stdin, then runs the case `runs` times and prints the milliseconds per run."""
+    stdin, then runs the case `runs` times, prints the milliseconds per run and waits for a line again."""
     kept = _keep_object_code()
     sys.path.insert(0, str(ROOT / "benchmarks"))
     from bench_scene import record_scenes
@@ -118,6 +125,8 @@ def profiled_process(case: str, runs: int) -> None:
     for _ in range(runs):
         simulate_scene(scene, peaks=peaks, window=window)
     print(json.dumps({"ms_per_run": 1e3 * (time.perf_counter() - t0) / runs}), flush=True)
+    sys.stdin.readline()  # until perf has stopped: the interpreter's exit (a full collection of every object) is
+    # not the runs' time, and it took a tenth of a short case's samples
 
 
 def shares(report: str) -> Counter:
@@ -131,6 +140,9 @@ def shares(report: str) -> Counter:
 
 
 def profile(case: str, runs: int) -> dict:
+    missing = [tool for tool in ("perf", "readelf") if shutil.which(tool) is None]
+    if missing:
+        raise SystemExit(f"{' and '.join(missing)} not found: install Linux perf (linux-perf) and binutils")
     child = subprocess.Popen([sys.executable, "-m", "impact.kernels", __file__, "--profiled", "--case", case,
                               "--runs", str(runs)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     if child.stdout.readline().strip() != READY:
@@ -142,8 +154,11 @@ def profile(case: str, runs: int) -> dict:
         child.stdin.write("go\n")
         child.stdin.flush()
         timing = json.loads(child.stdout.readline())
-        child.wait()
+        perf.send_signal(signal.SIGINT)
         perf.wait()
+        child.stdin.write("done\n")
+        child.stdin.flush()
+        child.wait()
         report = subprocess.run(["perf", "report", "-i", str(data), "--sort", "sym", "--stdio", "-q"],
                                 capture_output=True, text=True, check=True).stdout
     Path(f"/tmp/perf-{child.pid}.map").unlink(missing_ok=True)
