@@ -41,3 +41,10 @@ def test_the_shares_sum_each_functions_specialisations(tool):
     assert shares["impact.engine.clear_step.clear_steps"] == pytest.approx(30.05)
     assert shares["__sincos_fma"] == pytest.approx(5.31)
     assert sum(shares.values()) == pytest.approx(35.76)
+
+
+def test_a_case_is_found_by_the_start_of_its_name_and_an_unknown_one_names_the_cases(tool):
+    scene, peaks, window = tool.bench_case("3 storeys, CID at the roof")
+    assert [d.kind for d in scene.dampers] == ["cid"] and window
+    with pytest.raises(SystemExit, match="1 storey, bare"):
+        tool.bench_case("no such case")

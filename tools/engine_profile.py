@@ -106,17 +106,26 @@ def _kernel_addresses(dispatcher, kept: dict) -> dict[int, str]:
     return addresses
 
 
+def bench_case(case: str) -> tuple:
+    """bench_scene's case whose name starts with `case`: (scene, peaks, window); an unknown one names the cases."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from bench_scene import record_scenes
+
+    cases = record_scenes()
+    named = [name for name in cases if name.startswith(case)]
+    if not named:
+        raise SystemExit(f"--case {case!r} starts no case's name: one of {', '.join(map(repr, cases))}")
+    return cases[named[0]]
+
+
 def profiled_process(case: str, runs: int) -> None:
     """The process perf samples: loads the case's kernel, writes its perf map, says READY, waits for a line on
     stdin, then runs the case `runs` times, prints the milliseconds per run and waits for a line again."""
     kept = _keep_object_code()
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    from bench_scene import record_scenes
-
     from impact.engine.scene_loop import run_scene
     from impact.engine.scenes import simulate_scene
 
-    scene, peaks, window = next(v for k, v in record_scenes().items() if k.startswith(case))
+    scene, peaks, window = bench_case(case)
     simulate_scene(scene, peaks=peaks, window=window)
     Path(f"/tmp/perf-{os.getpid()}.map").write_text(perf_map(_kernel_addresses(run_scene, kept)))
     print(READY, flush=True)
@@ -175,6 +184,7 @@ def main(argv=None) -> int:
     if args.profiled:
         profiled_process(args.case, args.runs)
         return 0
+    bench_case(args.case)  # an unknown case is said here, not by the process perf would wait on
     result = profile(args.case, args.runs)
     print(f"{result['case']}: {result['ms_per_run']:.3f} ms per run over {args.runs} runs")
     for name, pct in list(result["percent"].items())[:30]:
