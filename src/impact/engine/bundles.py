@@ -121,8 +121,10 @@ Vectors = namedtuple("Vectors", "stack found qs vs v_before reduced moduli s_bef
 #: force, by the element's branch): every damper unit's row (the unit less its floor: its walls, its slide, its
 #: release), then every yielding storey's (its floor less the one below: its yield surface, its unloading, its
 #: collapse limit).  Beside them, per unit, what an instant's impacts did and its scratch flags (units resting on
-#: a wall they touched, floors whose impacts are done)
-Events = namedtuple("Events", "t side kind hit impulse touched floors_done")
+#: a wall they touched, floors whose impacts are done), and a floor's impacts' scratch (scene_loop.impacts_on_floor:
+#: each unit's group, and per group its approach speed, inverse mass, side, restitution, count and impulse), so that
+#: an impact allocates nothing
+Events = namedtuple("Events", "t side kind hit impulse touched floors_done group contacts")
 
 #: tables kept across segments: modal tables, a record step's tables, build_segment's scratch
 #: (floats, complexes) and the cache slot to replace next

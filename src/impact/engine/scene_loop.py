@@ -901,17 +901,13 @@ def impacts_on_floor(f, building, units, st, events, diag):
     """
     ufloor, um, ud, ue = units.floor, units.mass, units.gap, units.restitution
     mode, side, q, v = st.mode, st.side, st.q, st.v
-    hit, ev_side, impulse_out = events.hit, events.side, events.impulse
+    hit, ev_side, impulse_out, group = events.hit, events.side, events.impulse, events.group
+    u, minv, sd, e, count, imp = events.contacts  # per group, the first n entries of each
     nf = building.mass.shape[0]
     nu = um.shape[0]
-    group = np.full(nu, -1, dtype=np.int64)
-    u = np.empty(nu)
-    minv = np.empty(nu)
-    sd = np.empty(nu)
-    e = np.empty(nu)
-    count = np.zeros(nu)
     n = 0
     for j in range(nu):
+        group[j] = -1
         if ufloor[j] != f or not (hit[j] or mode[j] == MODE_STUCK):
             continue
         sj = ev_side[j] if hit[j] else side[j]
@@ -930,9 +926,8 @@ def impacts_on_floor(f, building, units, st, events, diag):
         group[j] = n - 1
     if n == 0:
         return 0
-    imp = np.zeros(n)
     mf = floor_mass(f, building, units, mode)
-    solve_impulses(u[:n], minv[:n], sd[:n], e[:n], count[:n], mf, imp)
+    solve_impulses(u[:n], minv[:n], sd[:n], e[:n], count[:n], mf, imp[:n])
     dv = 0.0
     for a in range(n):
         dv += sd[a] * count[a] * imp[a]
@@ -1078,7 +1073,8 @@ def resolve_events(tau_ev, building, units, fric, st, events, vstick, seg, diag)
     returns the number of impacts."""
     ufloor, um, ud = units.floor, units.mass, units.gap
     mode, side, offset, check, q, v = st.mode, st.side, st.offset, st.check, st.q, st.v
-    ev_t, ev_side, ev_kind, hit, impulse, touched, floors_done = events
+    ev_t, ev_side, ev_kind, hit = events.t, events.side, events.kind, events.hit
+    impulse, touched, floors_done = events.impulse, events.touched, events.floors_done
     nf = building.mass.shape[0]
     nu = um.shape[0]
     limit = at_instant(tau_ev)
@@ -1211,7 +1207,7 @@ def _workspace(nt, nfull, nu, nrows, nmax, slots, nmon):
                    np.zeros(2 * nmax), np.zeros(nu), np.ones(nt))
     events = Events(np.zeros(nrows), np.zeros(nrows, dtype=np.int64), np.zeros(nrows, dtype=np.int64),
                     np.zeros(nu, dtype=np.bool_), np.zeros(nu), np.zeros(nu, dtype=np.bool_),
-                    np.zeros(nfull, dtype=np.bool_))
+                    np.zeros(nfull, dtype=np.bool_), np.zeros(nu, dtype=np.int64), np.zeros((6, nu)))
     step = StepTables(np.full(slots, -1, dtype=np.int64), np.zeros((slots, nt), dtype=np.complex128),
                       np.zeros((slots, nt, nt), dtype=np.complex128),
                       np.zeros((slots, nt, SINGLE_COLUMNS), dtype=np.complex128),

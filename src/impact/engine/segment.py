@@ -888,8 +888,8 @@ def flow_tables(kap, ek, big_t, single):
 
 
 @njit(cache=True)
-def _phi_m(z, big_t, ez, out):
-    """out[m] = integral over [0, T] of tau^m exp(z tau), m = 0..3."""
+def _phi_m(z, big_t, ez, single, k):
+    """single[k, m] = integral over [0, T] of tau^m exp(z tau), m = 0..3."""
     zt = z * big_t
     if zt.real * zt.real + zt.imag * zt.imag < _SERIES * _SERIES:
         # sum_n (zT)^n / n! T^(m+1) / (n + m + 1): every m in one pass (reciprocals from a table: a
@@ -907,31 +907,28 @@ def _phi_m(z, big_t, ez, out):
             term = term * zt * _RECIP[n + 1]
             if term.real * term.real + term.imag * term.imag < 1e-36:
                 break
-        out[0] = a0 * big_t
-        out[1] = a1 * big_t ** 2
-        out[2] = a2 * big_t ** 3
-        out[3] = a3 * big_t ** 4
+        single[k, 0] = a0 * big_t
+        single[k, 1] = a1 * big_t ** 2
+        single[k, 2] = a2 * big_t ** 3
+        single[k, 3] = a3 * big_t ** 4
         return
     val = (ez - 1.0) / z
-    out[0] = val
+    single[k, 0] = val
     for i in range(1, NPOLY):
         val = (big_t ** i * ez - i * val) / z
-        out[i] = val
+        single[k, i] = val
 
 
 @njit(cache=True)
 def integral_tables(kap, ek, big_t, pair, single):
     """Tables for int_prod over [0, T]: pair[k, l] of exp((kap_k + kap_l) tau), single[k, m] of tau^m exp(kap_k tau)."""
     nt = kap.shape[0]
-    buf = np.empty(NPOLY, dtype=np.complex128)
     for k in range(nt):
         for l in range(k, nt):
             v = _phi0(kap[k] + kap[l], big_t, ek[k] * ek[l])
             pair[k, l] = v
             pair[l, k] = v
-        _phi_m(kap[k], big_t, ek[k], buf)
-        for m in range(NPOLY):
-            single[k, m] = buf[m]
+        _phi_m(kap[k], big_t, ek[k], single, k)
 
 
 @njit(cache=True)
@@ -986,20 +983,21 @@ def ramp_tables(kap, ek, big_t, ramp, single):
     motion's change: int_prod_ramp integrates those.  (exp(a t) - 1)(exp(b t) - 1) is
     r(a + b) - r(a) - r(b) with r(z) = exp(z t) - 1 - z t, whose first orders cancel exactly."""
     nt = kap.shape[0]
-    rest = np.empty(nt, dtype=np.complex128)
     for k in range(nt):
         zt = kap[k] * big_t
-        rest[k] = _rest2(zt, ek[k])
+        ramp[k, k] = _rest2(zt, ek[k])  # r(kap_k T), held on the diagonal until its row is made (no allocation)
         if zt.real * zt.real + zt.imag * zt.imag >= _RAMP_SERIES * _RAMP_SERIES:
             for m in range(NPOLY):
                 single[k, NPOLY + m] = single[k, m] - big_t ** (m + 1) * _RECIP[m + 1]
         else:
             _ramp_series(kap[k], big_t, single, k)
     for k in range(nt):
-        for l in range(k, nt):
-            v = big_t * (_rest2((kap[k] + kap[l]) * big_t, ek[k] * ek[l]) - rest[k] - rest[l])
+        rest_k = ramp[k, k]
+        for l in range(k + 1, nt):  # the diagonal's r(kap_l T) of the later rows are still there to read
+            v = big_t * (_rest2((kap[k] + kap[l]) * big_t, ek[k] * ek[l]) - rest_k - ramp[l, l])
             ramp[k, l] = v
             ramp[l, k] = v
+        ramp[k, k] = big_t * (_rest2((kap[k] + kap[k]) * big_t, ek[k] * ek[k]) - rest_k - rest_k)
 
 
 @njit(cache=True)
