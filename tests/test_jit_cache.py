@@ -4,6 +4,7 @@ compile lock, never by an import; a first compile is said on the terminal even f
 from __future__ import annotations
 
 import contextlib
+import importlib
 import io
 import json
 import os
@@ -100,3 +101,25 @@ def test_a_first_compile_is_said_on_the_terminal_from_a_job_logging_to_a_file(tm
             pass
     assert "compiling a test kernel" in log.getvalue()
     assert "compiling a test kernel" in capfd.readouterr().err
+
+
+def test_the_stamp_reads_every_module_a_kernel_is_compiled_from_and_not_the_python_around_them():
+    """A module of the engine defining a compiled function, or holding what one reads (a function, a constant, a
+    bundle's type), is in the digest; the dispatch and the scene's arrays are not, so editing them keeps the cache."""
+    from numba.core.registry import CPUDispatcher
+
+    stamped = {path.stem for path in jitcache.kernel_sources()}
+    engine = {path.stem for path in jitcache.CORE.glob("*.py")}
+    for name in engine:
+        module = importlib.import_module(f"impact.engine.{name}")
+        kernels = [value for value in vars(module).values()
+                   if isinstance(value, CPUDispatcher) and value.py_func.__module__ == module.__name__]
+        if kernels:
+            assert name in stamped, f"{name} defines kernels but is not stamped"
+        if name in stamped:  # what a stamped module reads from the engine is stamped too
+            read = {getattr(value, "__module__", None) or getattr(value, "__name__", "")
+                    for value in vars(module).values()}
+            read = {mod.split(".")[2] for mod in read if mod.startswith("impact.engine.")}
+            assert read <= stamped | {name}, f"{name} reads {sorted(read - stamped)}, not stamped"
+    assert {"scene_loop", "segment", "clear_step", "events", "layout", "bundles", "paper_loop"} <= stamped
+    assert stamped.isdisjoint({"run", "scenes", "spectra", "paper", "diagnostics", "jitcache", "__init__"})

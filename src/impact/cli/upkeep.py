@@ -7,8 +7,8 @@ import os
 import sys
 import time
 
-# the engine's name for its cache folder is private; making it public would edit the engine's sources, which
-# purges every compiled kernel and reruns the whole study (jitcache.sources_digest, code_deps)
+# the engine's name for its cache folder is private; making it public would edit a module every rule imports,
+# which reruns the whole study (code_deps)
 from impact.engine.jitcache import _cache_dir as cache_dir
 from impact.engine.paper import ensure_compiled, ensure_sampler_compiled
 from impact.engine.scenes import compile_scene_loops

@@ -4,8 +4,9 @@ numba checks only the source file of the function it loads from its cache,
 but a kernel carries compiled copies of the functions it calls from other
 modules: after an edit of segment.py alone, run_scene (scene_loop.py) or the
 paper loop (paper_loop.py, which shares the contact search of events.py) would
-load stale code.  A stamp of the engine's sources, kept beside each cache,
-catches that and drops the cached kernels of that folder once.
+load stale code.  A stamp of the sources the kernels are compiled from
+(:func:`kernel_sources`), kept beside each cache, catches that and drops the
+cached kernels of that folder once.
 
 :func:`compile_lock` serialises compiling and loading across processes, and is
 where a stale cache is dropped: every call of a cached kernel goes through it
@@ -18,6 +19,7 @@ import contextlib
 import functools
 import hashlib
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -29,10 +31,44 @@ CORE = Path(__file__).parent
 STAMP = "impact-sources"
 
 
+# an engine module's imports of other engine modules: `from impact.engine.<module> import ...`, or
+# `from impact.engine import <module> [as x], ...` (on one line or in parentheses); a regular expression, since
+# parsing the sources costs every process a tenth of a second before its first kernel
+_FROM_MODULE = re.compile(r"^\s*from impact\.engine\.(\w+) import", re.MULTILINE)
+_FROM_ENGINE = re.compile(r"^\s*from impact\.engine import (\([^)]*\)|[^\n]*)", re.MULTILINE)
+_USES_NUMBA = re.compile(r"^\s*(import numba|from numba[ .])", re.MULTILINE)
+
+
+def _engine_imports(text: str) -> set[str]:
+    """The engine's modules that a module of the engine imports."""
+    names = set(_FROM_MODULE.findall(text))
+    for group in _FROM_ENGINE.findall(text):
+        names.update(part.split(" as ")[0].strip() for part in group.strip("()").split(","))
+    return {name for name in names if (CORE / f"{name}.py").exists()}
+
+
+def kernel_sources() -> list[Path]:
+    """The engine's modules whose code and constants the kernels are compiled from: those that import numba, and
+    the engine's modules they import, transitively.  The Python around the kernels (run.py's dispatch, scenes.py's
+    arrays and results) is not among them, so an edit there keeps the compiled kernels, which take a quarter of an
+    hour to make again."""
+    modules = {path.stem: path for path in CORE.glob("*.py")}
+    texts = {name: path.read_text() for name, path in modules.items()}
+    imports = {name: _engine_imports(text) for name, text in texts.items()}
+    numba_users = {name for name, text in texts.items() if _USES_NUMBA.search(text)}
+    kernels, todo = set(), list(numba_users)
+    while todo:
+        name = todo.pop()
+        if name not in kernels:
+            kernels.add(name)
+            todo.extend(imports[name])
+    return [modules[name] for name in sorted(kernels)]
+
+
 @functools.cache  # every compile_lock reads it; the sources are read once per process
 def sources_digest() -> str:
     digest = hashlib.sha256()
-    for src in sorted(CORE.glob("*.py")):
+    for src in kernel_sources():
         digest.update(src.name.encode() + src.read_bytes())
     return digest.hexdigest()[:16]
 
