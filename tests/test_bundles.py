@@ -109,7 +109,8 @@ def test_a_borrowed_bundle_is_the_same_bundle_of_its_owners_memory():
     units = bundles.UnitArrays(*(np.full(2, float(i)) for i in range(6)))
     scene = bundles.SceneArrays(np.arange(3.0), bundles.BuildingArrays(np.ones(2), np.eye(2), np.eye(2)), units,
                                 np.ones(2), bundles.MonitorArrays(np.ones((1, 2)), np.zeros(1, dtype=np.int64),
-                                                                  np.ones(1), np.ones(1)))
+                                                                  np.ones(1), np.ones(1),
+                                                                  np.zeros(1, dtype=np.int64)))
     pair = (np.zeros(3), 4)
     assert write_through(scene, None, pair) == (3.0, 0.0, True, 4)
     assert scene.building.stiffness[0, 1] == 5.0 and units.gap[1] == 7.0 and pair[0][2] == 9.0

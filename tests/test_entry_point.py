@@ -163,8 +163,34 @@ def test_a_run_certifies_the_peaks_it_is_asked_for_to_round_off_and_no_others():
     assert bare.impacts == full.impacts and abs(bare.diagnostics["energy_residual"]) <= 1e-12
     assert math.isnan(bare.amplitude) and math.isnan(bare.rms_roof_displacement) and full.amplitude > 0.0
     assert math.isnan(engine.simulate(scene).peak_interstorey_drift)  # the default asks for no peak
-    with pytest.raises(ParameterError, match="peaks: 'storeys' unknown; allowed roof, drifts, strokes"):
+    with pytest.raises(ParameterError, match="peaks: 'storeys' unknown; allowed roof, drifts, strokes, largest_drift"):
         simulate_scene(scene, peaks=("storeys",))
+
+
+@pytest.mark.parametrize("kind", ["bare", "cid", "pid"])
+def test_a_run_asked_for_the_largest_drift_certifies_the_largest_storeys_peak_on_fewer_searched_steps(kind):
+    """The IDA's run (the roof's peaks, the largest drift, the strokes): its drift is the largest of the storeys'
+    peaks that a run asked for every peak certifies, to round-off; each storey's reads NaN; and the storeys'
+    shared running peak lets more record steps be taken whole (the point of sharing it: a storey below the largest
+    no longer holds a step to a search), each the same motion to round-off, so impacts and roof peaks agree."""
+    building = Building.uniform(5, 1.0, 0.02)
+    t = np.arange(0.0, 8.0, 0.01)
+    quake = GroundMotion(3.0 * np.sin(2.0 * np.pi * t) * np.exp(-0.3 * t) + np.sin(7.0 * t), 0.01)
+    dampers = {"bare": (), "cid": (Damper("cid", 0.02 * building.total_mass, gap=0.08, e=0.5),),
+               "pid": (Damper("pid", 0.02 * building.total_mass, gap=0.1, e=0.5, tuning=1.0, damping=0.02),)}[kind]
+    scene = Scene(building, dampers, quake)
+    full = engine.simulate(scene, measures=("impacts", "peaks"))
+    ida = engine.simulate(scene, measures=("impacts", "roof", "largest_drift", "strokes"))
+    assert ida.peak_interstorey_drift == pytest.approx(np.max(full.peak_drifts), rel=1e-12)
+    assert np.all(np.isnan(ida.peak_drifts)) and np.all(np.isnan(ida.peak_roundoff[2:7]))
+    assert (ida.peak_roof_displacement, ida.peak_roof_acceleration) == pytest.approx(
+        (full.peak_roof_displacement, full.peak_roof_acceleration), rel=1e-12)
+    np.testing.assert_allclose(ida.peak_strokes, full.peak_strokes, rtol=1e-12)
+    assert ida.impacts == full.impacts and (kind == "bare" or full.impacts > 0)
+    assert abs(ida.diagnostics["energy_residual"]) <= 1e-12 and math.isnan(ida.rms_roof_displacement)
+    assert ida.diagnostics["clear_steps"] > full.diagnostics["clear_steps"]
+    with pytest.raises(ParameterError, match="allowed roof, drifts, strokes, largest_drift"):
+        simulate_scene(scene, peaks=("largest_stroke",))
 
 
 def test_the_paper_loop_defines_no_index_of_its_own_and_reads_the_engines_one_layout():

@@ -55,8 +55,9 @@ YieldArrays = namedtuple("YieldArrays", "stiffness hardening yield_drift geometr
 ClearStep = namedtuple("ClearStep", "masks flow work visc square part inv inv_size ends bound load half twin")
 
 #: what the run certifies peaks of: rows over the degrees of freedom, kind (layout.MON_*),
-#: the record's coefficient (an absolute acceleration) and a cap the peak cannot pass
-MonitorArrays = namedtuple("MonitorArrays", "rows kind record_coef cap")
+#: the record's coefficient (an absolute acceleration), a cap the peak cannot pass, and the first monitor of the
+#: group whose running peak it shares (itself where its own peak is certified; events.raise_peak)
+MonitorArrays = namedtuple("MonitorArrays", "rows kind record_coef cap share")
 
 #: the paper loop's workspace (paper_loop._loop, every array borrowed): its complex rows over the seven slots (the
 #: exponents kap, x's and y's coefficients cx cy, the gap row cs, the velocity row cv, a contact row cq, the force

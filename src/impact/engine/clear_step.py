@@ -39,7 +39,7 @@ from numba import njit
 from scipy.linalg import expm
 
 from impact.engine.bundles import ClearStep
-from impact.engine.events import PEAK_RTOL
+from impact.engine.events import PEAK_RTOL, raise_peak
 from impact.engine.layout import (
     BRANCH_ELASTIC,
     D_CLEAR,
@@ -548,7 +548,8 @@ def clear_steps(clear, scratch, state, peaks, load, times, building, units, spri
     are the pattern's of the storeys' branches now (none: no step).  Each step is proved with the bounds over |y|
     first, and only where they cannot prove it with those over the modal amplitudes, which cost more to read.
     load: (the run's parameters, the record); times: (t, the run's end, the window's start, the next sample's
-    time); state: (q, v, diag); peaks: (each monitor's running peak, its time, its cap, its window square);
+    time); state: (q, v, diag); peaks: (each monitor's running peak, its time, its cap, the first monitor of the
+    group sharing its running peak, its window square);
     scratch: (u, the next state, y = u less the particular motion, |y| and then its modal amplitudes' moduli, the
     monitors' new peaks and their times (_within_peaks), each band's lower and upper end); building, units, springs
     (None without), yld (None: elastic): the scene's, whose energy the largest-energy diagnostic reads.  The
@@ -556,7 +557,7 @@ def clear_steps(clear, scratch, state, peaks, load, times, building, units, spri
     masks, flow, work, visc, square, part, inv, inv_size, ends, bound, load_bound, half, twin = clear
     u, nxt, y, reach_of, marks, lo, hi = scratch
     q, v, diag = state
-    peak, peak_t, cap, x2 = peaks
+    peak, peak_t, cap, share, x2 = peaks
     t, t_end, t_square, t_sample = times
     p, record = load
     k = _pattern(masks, yld)
@@ -599,9 +600,8 @@ def clear_steps(clear, scratch, state, peaks, load, times, building, units, spri
                     and _within_peaks(ends, bound, load_bound, u, nxt, reach_of, (*within, True), peak, cap, marks)):
                 return t
         for m in range(nmon):
-            if marks[nmon + m] >= 0.0:
-                peak[m] = marks[m]
-                peak_t[m] = t + marks[nmon + m]
+            if marks[nmon + m] >= 0.0 and marks[m] > peak[m]:  # a member of a shared group may top another's mark
+                raise_peak(peak, peak_t, share, m, marks[m], t + marks[nmon + m])
         step_work, step_visc, step_square = _forms(work, visc, square, k * size, u)
         diag[D_WORK] += step_work
         diag[D_VISC] += step_visc

@@ -34,6 +34,20 @@ TAYLOR_PIECES = 16  # ... and over at most this many pieces of a segment, each f
 _FINISHED, _GAVE_UP, _STACK_FULL = 0, 1, 2  # how a peak search ended
 
 
+@njit(cache=True, inline='always')
+def raise_peak(peak, peak_t, share, m, value, at):
+    """Monitor m's new running peak, value at time at, written for every monitor sharing it: the members of a group
+    of which only the largest peak is certified hold one running peak, so that the group's largest settles a
+    member's step where the member's own smaller peak could not (share[m]: the group's first monitor, m where the
+    monitor's own peak is certified; a group's members are consecutive)."""
+    first = share[m]
+    j = first
+    while j < peak.shape[0] and share[j] == first:
+        peak[j] = value
+        peak_t[j] = at
+        j += 1
+
+
 @njit(cache=True)
 def _newton_in_bracket(kap, c, p, level, side, a, b, t, of_slope, iterations):
     """Safeguarded Newton on g = side (f - level), f = h (or h' with of_slope), g(a) < 0 <= g(b).

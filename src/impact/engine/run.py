@@ -31,14 +31,23 @@ from impact.engine import paper
 from impact.engine import paper_loop as K
 from impact.engine.contact import free_vibration_stick
 from impact.engine.diagnostics import ENERGY_TERMS, read_diagnostics
-from impact.engine.scenes import MODE_CODES, PEAK_GROUPS, EndsInState, SceneResult, contacts_of, simulate_scene
+from impact.engine.scenes import (
+    LARGEST_OF,
+    MODE_CODES,
+    PEAK_GROUPS,
+    EndsInState,
+    SceneResult,
+    contacts_of,
+    simulate_scene,
+)
 from impact.model.params import ParameterError, Protocol, System, ipc_class, ipc_label
 from impact.model.scene import Harmonic, Scene, State, paper_scene_from_system
 
 #: what a run can measure: the window's amplitude (sqrt 2 RMS of the roof), the impacts and diagnostics
-#: with the final state, the certified peaks of every monitor (roof, drifts, strokes) or of the drifts or the
-#: strokes alone, impact records and the state at requested times
-MEASURES = ("amplitude", "impacts", "peaks", "drifts", "strokes", "records", "samples")
+#: with the final state, the certified peaks of every monitor (roof, drifts, strokes) with the roof's RMS, or of
+#: one group of monitors alone (scenes.PEAK_GROUPS) or the largest of one (scenes.LARGEST_OF), impact records and
+#: the state at requested times
+MEASURES = ("amplitude", "impacts", "peaks", *PEAK_GROUPS, *LARGEST_OF, "records", "samples")
 DEFAULT_MEASURES = ("amplitude", "impacts")
 PAPER_MEASURES = frozenset(("amplitude", "impacts", "records"))
 #: what the paper loop's dense output measures (paper.dense_samples): the state at the sample times, the impacts and
@@ -180,8 +189,11 @@ def has_window(measures: frozenset) -> bool:
 
 def peak_groups(measures: frozenset) -> tuple:
     """The monitors' groups (scenes.PEAK_GROUPS) whose peaks the measures ask the scene loop to certify: every
-    group for "peaks", else those named ("drifts", "strokes"); a group not asked costs nothing and reads NaN."""
-    return PEAK_GROUPS if "peaks" in measures else tuple(g for g in PEAK_GROUPS if g in measures)
+    group for "peaks", else those named ("roof", "drifts", "strokes"), and those asked for their largest alone
+    (scenes.LARGEST_OF); a group not asked costs nothing and reads NaN."""
+    if "peaks" in measures:
+        return PEAK_GROUPS
+    return tuple(g for g in (*PEAK_GROUPS, *LARGEST_OF) if g in measures)
 
 
 #: the loops, tried in order (the fast special case first)
@@ -193,8 +205,10 @@ def simulate(scene: Scene, measures=DEFAULT_MEASURES, *, record: int = 0, times=
 
     measures: names from :data:`MEASURES`, what the run must return beside its diagnostics and final state:
     "amplitude" (the paper's amplitude, sqrt 2 times the roof's RMS over the window), "impacts" (the impact count),
-    "peaks" (the certified peaks of the roof, every drift and every unit's stroke, and their RMS), "drifts" or
-    "strokes" (the certified peaks of the storeys' drifts or of the units' strokes alone), "records" (each
+    "peaks" (the certified peaks of the roof, every drift and every unit's stroke, and the roof's RMS), "roof",
+    "drifts" or "strokes" (the certified peaks of the roof's displacement and acceleration, of the storeys' drifts
+    or of the units' strokes alone, without the RMS), "largest_drift" (the largest of the storeys' drifts alone,
+    certified as the peak of the group's largest: each storey's reads NaN), "records" (each
     impact's time, unit, side, velocities and impulse, up to `record` of them), "samples" (every degree of freedom's
     displacement and velocity at `times`, a sorted array of instants, and, from the scene loop, each displacement's
     round-off, "q_roundoff").  Asking only for what is read lets the

@@ -64,7 +64,7 @@ from impact.engine.contact import (
     stays,
     stuck_row,
 )
-from impact.engine.events import PEAK_RTOL, first_exit, peak_abs, shift_row
+from impact.engine.events import PEAK_RTOL, first_exit, peak_abs, raise_peak, shift_row
 from impact.engine.layout import (
     BRANCH_ELASTIC,
     D_CAP,
@@ -832,7 +832,7 @@ def monitor_modal(w, s, n, tau, t, t_win, monitors, ramp, harmonic, yielding):
     """
     kap, kpow, ek, cm, pm, stack, wt, diag = w.kap, w.kpow, w.ek, w.cm, w.pm, w.stack, w.wt, w.diag
     mon_peak, mon_peak_t, mon_roundoff = w.mon_peak, w.mon_peak_t, w.mon_roundoff
-    mon_rows, mon_cap = monitors.rows, monitors.cap
+    mon_rows, mon_cap, share = monitors.rows, monitors.cap, monitors.share
     r0, r1 = ramp
     for m in range(mon_rows.shape[0]):
         searched = mon_peak[m] < mon_cap[m]
@@ -853,8 +853,7 @@ def monitor_modal(w, s, n, tau, t, t_win, monitors, ramp, harmonic, yielding):
             # its wall is measured apart, as penetration), so that end is its peak, without a search that its
             # row's cancelling terms could keep from settling (a unit resting at its wall as a record starts)
             if ends > peak:
-                mon_peak[m] = ends
-                mon_peak_t[m] = t + (tau if abs(h1) >= abs(h0) else 0.0)
+                raise_peak(mon_peak, mon_peak_t, share, m, ends, t + (tau if abs(h1) >= abs(h0) else 0.0))
             continue
         if ends > peak or ends + curvature_bound(w, s, m, n, tau, harmonic) * tau * tau / 8.0 \
                 > peak * (1.0 + PEAK_RTOL):
@@ -863,8 +862,7 @@ def monitor_modal(w, s, n, tau, t, t_win, monitors, ramp, harmonic, yielding):
                 diag[D_PEAK_GAVE_UP] += 1.0
             mon_roundoff[m] = max(mon_roundoff[m], slack)
             if at >= 0.0:
-                mon_peak[m] = peak
-                mon_peak_t[m] = t + at
+                raise_peak(mon_peak, mon_peak_t, share, m, peak, t + at)
 
 
 @njit(cache=True, inline='always')
@@ -1422,7 +1420,7 @@ def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out)
     mode, escape, escape_v = st_b.mode, st_b.escape, st_b.escape_v
     q, v = st_b.q, st_b.v
     diag, ts, samples = out_b.diag, out_b.ts, out_b.samples
-    peaks = (out_b.peak, out_b.peak_t, monitors.cap, out_b.x2)
+    peaks = (out_b.peak, out_b.peak_t, monitors.cap, monitors.share, out_b.x2)
     # the optional parts, borrowed to the compiled steps (None stays None); the inlined steps take the run's own
     # arguments, because numba prunes a branch on `is None` only on a function's own argument
     springs_b, fric_b, harm_b, record_b, yld_b = borrowed(springs), borrowed(fric), borrowed(harm), \

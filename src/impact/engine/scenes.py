@@ -186,6 +186,10 @@ def _load_arrays(scene: Scene, mass_full: np.ndarray):
 #: each storey's drift, each damper's stroke.  A run certifies the groups it is asked for (simulate_scene's
 #: `peaks`); the others read NaN and cost nothing but the roof's row, which the window's square reads
 PEAK_GROUPS = ("roof", "drifts", "strokes")
+#: a group of which a run may ask only the largest peak: its monitors then share one running peak (bundles.
+#: MonitorArrays.share), so that a storey's drift below the largest is settled by the largest's bar, searched less
+#: and clear of more record steps; each member reads NaN, the result the group's largest (the IDA's ask)
+LARGEST_OF = {"largest_drift": "drifts"}
 
 
 def _monitors(scene: Scene, nfull: int, peaks=PEAK_GROUPS):
@@ -194,10 +198,13 @@ def _monitors(scene: Scene, nfull: int, peaks=PEAK_GROUPS):
     Also each row's cap: a bound its peak cannot pass (beyond the contact tolerance).  A stroke between
     walls reaches its cap, half the gap, at the first impact; the kernel stops searching it from then on.  A
     group the run is not asked to certify (`peaks`, of PEAK_GROUPS) has cap 0: the kernel never searches it.
+    And each row's share: the first row of a group asked for its largest peak alone (LARGEST_OF), its own index
+    otherwise.
     """
-    unknown = sorted(set(peaks) - set(PEAK_GROUPS))
+    unknown = sorted(set(peaks) - set(PEAK_GROUPS) - set(LARGEST_OF))
     if unknown:
-        raise ParameterError(f"peaks: {', '.join(map(repr, unknown))} unknown; allowed {', '.join(PEAK_GROUPS)}")
+        raise ParameterError(f"peaks: {', '.join(map(repr, unknown))} unknown; allowed "
+                             f"{', '.join((*PEAK_GROUPS, *LARGEST_OF))}")
     nf = scene.building.storeys
     rows = []
     kinds = []
@@ -225,14 +232,26 @@ def _monitors(scene: Scene, nfull: int, peaks=PEAK_GROUPS):
     caps = np.array(caps)
     for part in _unasked(nf, peaks):
         caps[part] = 0.0
-    return np.array(rows), np.array(kinds, dtype=np.int64), caps
+    share = np.arange(len(rows), dtype=np.int64)
+    for part in _shared(nf, peaks):
+        share[part] = part.start
+    return np.array(rows), np.array(kinds, dtype=np.int64), caps, share
+
+
+def _parts(nf: int) -> dict[str, slice]:
+    """Each group's monitors, as _monitors lays them out: the roof's two, the drifts, the strokes."""
+    return dict(zip(PEAK_GROUPS, (slice(0, 2), slice(2, 2 + nf), slice(2 + nf, None))))
 
 
 def _unasked(nf: int, peaks) -> list[slice]:
-    """The monitors' rows (as _monitors lays them out: the roof's two, the drifts, the strokes) of the groups of
-    PEAK_GROUPS that `peaks` does not ask for."""
-    parts = dict(zip(PEAK_GROUPS, (slice(0, 2), slice(2, 2 + nf), slice(2 + nf, None))))
-    return [part for group, part in parts.items() if group not in peaks]
+    """The monitors of the groups of PEAK_GROUPS that `peaks` asks for neither each nor the largest of."""
+    asked = {LARGEST_OF.get(name, name) for name in peaks}
+    return [part for group, part in _parts(nf).items() if group not in asked]
+
+
+def _shared(nf: int, peaks) -> list[slice]:
+    """The monitors of the groups that `peaks` asks for the largest of alone (each member's peak not asked)."""
+    return [_parts(nf)[group] for name, group in LARGEST_OF.items() if name in peaks and group not in peaks]
 
 
 #: the engine's code of each contact mode of the model (impact.model.scene.CONTACT_MODES), and back
@@ -321,8 +340,8 @@ def _scene_arrays(scene: Scene, peaks=PEAK_GROUPS, window: bool = True):
     units = UnitArrays(kind, floor, mass, uload, gap, e)
     springs = SpringArrays(k, c) if np.any(kind & L.UNIT_SPRING) else None
     fric = a_f if np.any(a_f > 0.0) else None
-    rows, kinds, caps = _monitors(scene, nf + len(mass), peaks)
-    monitors = MonitorArrays(rows, kinds, np.where(kinds == L.MON_ACCEL, mon_rec, 0.0), caps)
+    rows, kinds, caps, share = _monitors(scene, nf + len(mass), peaks)
+    monitors = MonitorArrays(rows, kinds, np.where(kinds == L.MON_ACCEL, mon_rec, 0.0), caps, share)
     n_spring = int(np.count_nonzero(kind & L.UNIT_SPRING))
     p = np.zeros(L.NPAR)
     p[L.P_T0] = 0.0
@@ -383,8 +402,8 @@ def simulate_scene(scene: Scene, *, record: int = 0, times=None, peaks=PEAK_GROU
 
     record: keep up to this many impact records; times: sorted times at which
     to sample the state of every degree of freedom (dense output); peaks: the groups of monitors
-    (PEAK_GROUPS) whose peaks the run certifies, the others NaN; window: whether the run integrates the roof's
-    square over the window (the amplitude and the RMS, NaN without it).
+    (PEAK_GROUPS) whose peaks the run certifies, or whose largest peak alone (LARGEST_OF), the others NaN; window:
+    whether the run integrates the roof's square over the window (the amplitude and the RMS, NaN without it).
     """
     arrays = _scene_arrays(scene, peaks, window)
     key = _signature_key(arrays)
@@ -440,13 +459,17 @@ def _result(scene: Scene, arrays: dict, out: dict, groups=PEAK_GROUPS, window: b
     for part in _unasked(nf, groups):
         peaks[part] = math.nan
         roundoff[part] = math.nan
+    largest_drift = float(np.max(peaks[2:2 + nf])) if complete else math.nan
+    for part in _shared(nf, groups):  # a member holds the group's largest, not its own peak
+        peaks[part] = math.nan
+        roundoff[part] = math.nan
     return SceneResult(
         scene=scene,
         peak_roof_displacement=float(peaks[0]) if complete else math.nan,
         peak_roof_displacement_time=float(out["peak_t"][0]) if "roof" in groups else math.nan,
         rms_roof_displacement=rms,
         peak_roof_acceleration=float(peaks[1]) if complete else math.nan,
-        peak_interstorey_drift=float(np.max(peaks[2:2 + nf])) if complete else math.nan,
+        peak_interstorey_drift=largest_drift,
         peak_drifts=peaks[2:2 + nf].copy(),
         peak_strokes=peaks[2 + nf:].copy(),
         impacts=int(diag[L.D_IMPACTS]),
