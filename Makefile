@@ -21,7 +21,7 @@ $(STAMP): pyproject.toml constraints.txt
 	touch $(STAMP)
 
 $(COMPILED): $(STAMP)
-	@echo "compiling the engine's kernels into numba's cache, once (about 6 minutes)"
+	@echo "compiling the engine's kernels into numba's cache, once (a quarter of an hour: the README has the measured time)"
 	$(BIN)/impact compile > /dev/null
 	touch $(COMPILED)
 
