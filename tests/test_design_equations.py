@@ -12,7 +12,7 @@ import pytest
 import yaml
 
 from impact.cli import main
-from impact.closed_form.tmd import tmd_optimum
+from impact.closed_form.tmd_minimax import tmd_optimum
 from impact.model.params import ParameterError
 from impact.stages.design.equations.formulas import (
     Point,

@@ -236,6 +236,27 @@ print(json.dumps(sorted(m.__file__ for n, m in sys.modules.items() if n.startswi
         assert loaded <= library, (script.name, sorted(map(str, loaded - library)))
 
 
+#: the scripts of the jobs the study runs by the dozen (one per building and damper, each a few seconds of runs)
+RUN_JOBS = ("ida_bare", "ida_damper", "loads_bare", "loads_damper", "collapse_bare", "collapse_damper")
+
+
+def test_the_run_jobs_load_no_optimiser_or_distribution():
+    """scipy.optimize and scipy.stats cost a job 0.1 to 0.4 s to import (docs/performance.md, "What a job loads"),
+    and a job that designs a TMD (Den Hartog's closed form) or reads P695's normal tail (ndtr) needs neither."""
+    code = """
+import ast, json, sys
+path = sys.argv[1]
+for node in ast.parse(open(path).read()).body:
+    if isinstance(node, (ast.Import, ast.ImportFrom)):
+        exec(compile(ast.Module([node], []), path, "exec"))
+print(json.dumps(sorted(n for n in sys.modules if n in ("scipy.optimize", "scipy.stats"))))
+"""
+    for name in RUN_JOBS:
+        proc = subprocess.run([sys.executable, "-c", code, str(SCRIPTS / f"{name}.py")], capture_output=True,
+                              text=True, check=True)
+        assert json.loads(proc.stdout) == [], name
+
+
 def test_a_content_edit_changes_the_digest_of_exactly_the_scripts_that_reach_it(tmp_path):
     import shutil
 

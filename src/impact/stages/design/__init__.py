@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from impact.closed_form.tmd import tmd_optimum, tmd_peak
+from impact.closed_form.tmd_minimax import tmd_optimum, tmd_peak
 from impact.engine.run import sweep
 from impact.model.kinds import KINDS, TMD
 from impact.model.params import ParameterError, Protocol, System, a_max, frequency_grid

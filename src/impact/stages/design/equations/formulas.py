@@ -26,7 +26,8 @@ import numpy as np
 import xarray as xr
 from scipy.optimize import least_squares
 
-from impact.closed_form.tmd import den_hartog, tmd_peak
+from impact.closed_form.tmd import den_hartog
+from impact.closed_form.tmd_minimax import tmd_peak
 from impact.model.kinds import KINDS, TMD
 from impact.model.params import ParameterError
 from impact.stages.design import chart_config
