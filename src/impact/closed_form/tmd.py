@@ -43,6 +43,7 @@ from impact.model.scene import Damper
 # --------------------------------------------------------------------------
 
 def check_ranges(mu=None, beta=None, f=None, beta_t=None, force_ratio=None, *, mu_positive=False):
+    """Refuse a TMD parameter outside its range (ParameterError naming it and the range); None skips one."""
     checks = []
     if mu is not None:
         checks.append(("mu", mu, (mu > 0) if mu_positive else (mu >= 0), "(0, inf)" if mu_positive else "[0, inf)"))
