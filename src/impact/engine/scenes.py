@@ -105,10 +105,10 @@ class SceneResult(EndsInState):
 
     def _roundoff_json(self, units: str) -> dict:
         """What each certified peak is known to (peak_roundoff), named as the peaks are."""
-        r, nf = self.peak_roundoff, len(self.peak_drifts)
+        r, parts = self.peak_roundoff, _parts(len(self.peak_drifts))
         return {f"roof_displacement_{units}": float(r[0]), f"roof_acceleration_{units}s2": float(r[1]),
-                f"drifts_{units}": [float(x) for x in r[2:2 + nf]],
-                f"damper_strokes_{units}": [float(x) for x in r[2 + nf:]]}
+                f"drifts_{units}": [float(x) for x in r[parts["drifts"]]],
+                f"damper_strokes_{units}": [float(x) for x in r[parts["strokes"]]]}
 
 
 @dataclass
@@ -459,7 +459,9 @@ def _result(scene: Scene, arrays: dict, out: dict, groups=PEAK_GROUPS, window: b
     for part in _unasked(nf, groups):
         peaks[part] = math.nan
         roundoff[part] = math.nan
-    largest_drift = float(np.max(peaks[2:2 + nf])) if complete else math.nan
+    parts = _parts(nf)
+    drifts, strokes = parts["drifts"], parts["strokes"]
+    largest_drift = float(np.max(peaks[drifts])) if complete else math.nan
     for part in _shared(nf, groups):  # a member holds the group's largest, not its own peak
         peaks[part] = math.nan
         roundoff[part] = math.nan
@@ -470,8 +472,8 @@ def _result(scene: Scene, arrays: dict, out: dict, groups=PEAK_GROUPS, window: b
         rms_roof_displacement=rms,
         peak_roof_acceleration=float(peaks[1]) if complete else math.nan,
         peak_interstorey_drift=largest_drift,
-        peak_drifts=peaks[2:2 + nf].copy(),
-        peak_strokes=peaks[2 + nf:].copy(),
+        peak_drifts=peaks[drifts].copy(),
+        peak_strokes=peaks[strokes].copy(),
         impacts=int(diag[L.D_IMPACTS]),
         diagnostics=read_diagnostics(diag),
         final_q=out["q"].copy(),
@@ -480,7 +482,7 @@ def _result(scene: Scene, arrays: dict, out: dict, groups=PEAK_GROUPS, window: b
         samples=samples,
         amplitude=math.sqrt(2.0) * rms,
         window_span=float(span),
-        storeys=_storey_response(scene, out["yld"], peaks[2:2 + nf], collapsed),
+        storeys=_storey_response(scene, out["yld"], peaks[drifts], collapsed),
         final_contacts=contacts_of(out["contact"]),
         peak_roundoff=roundoff,
     )
