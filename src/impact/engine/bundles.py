@@ -3,7 +3,7 @@
 numba compiles a namedtuple into a struct, and a compiled function takes a few
 bundles instead of dozens of positional arrays.  The steps the loop runs on every
 segment (scene_loop.search_constraints, monitor_modal, integrate_energy, move_to_end,
-modal.integrate_modal, ...) are inlined, and there each array in a call's
+modal.integrate_modal, ...) are compiled calls, and each array in a call's
 arguments costs a reference count, a namedtuple as many as it holds (bundling
 them in namedtuples cost 8 to 31 % of a run on benchmarks/bench_scene.py's
 cases): they take one SegmentWork, a structref, which counts only the fields a
@@ -156,7 +156,7 @@ class SegmentWorkType(types.StructRef):
 
 
 class SegmentWork(structref.StructRefProxy):
-    """The arrays the steps inlined on every segment work in, as one numba structref (built in run_scene).
+    """The arrays the steps on every segment work in, as one numba structref (built in run_scene).
 
     A structref travels as one reference, and a step counts a reference only for each field it reads; a
     namedtuple counts one for every array it holds, which made bundling these steps cost 8 to 31 %.  The
@@ -208,8 +208,8 @@ def borrowed(typingctx, arr):
     """A view of the array that holds no reference to its memory: the same data, shape and strides, no meminfo;
     of a bundle (a namedtuple or tuple of arrays, nested or not), the same bundle of such views; of None, None.
 
-    numba counts a reference, atomically, each time a step reads an array out of a structref or binds one to an
-    inlined step's argument, and its pruning pass removes only the counts it can pair within simple blocks: on a
+    numba counts a reference, atomically, each time a step reads an array out of a structref or binds one to a
+    step's argument, and its pruning pass removes only the counts it can pair within simple blocks: on a
     bare building those counts were 75 % of the scene loop's time (about 130 pairs per segment, found with
     gdb on NRT_incref).  A borrowed view's counts test a null pointer and return.  It is safe while its owner
     lives: numba frees an array after its owner's last use, not at the end of the function, so whatever holds

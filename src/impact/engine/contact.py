@@ -226,7 +226,7 @@ def floor_decision(kap, cq, pq, a_f):
     return slide_decision(q, scale, a_f, _ZERO_TOL)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def rebound_too_slow(push, rebound, tol):
     """Whether a rebound at relative speed `rebound`, pushed back at `push` (the gap row's second derivative
     towards the wall), has an excursion v^2 / (2 push) within the contact tolerance `tol`: then it cannot be
@@ -237,7 +237,7 @@ def rebound_too_slow(push, rebound, tol):
 # the state machine's transitions: each sets a unit's contact state (mode, wall side, slide sign, and the escapes of
 # its next searches from the boundary it starts on), the same in both loops
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def meet_wall(st, j, side, friction):
     """Unit j meets the wall on `side` (it strikes or touches it, or the wall moves away from it): with friction,
     a slide from here can only be away from that wall."""
@@ -246,7 +246,7 @@ def meet_wall(st, j, side, friction):
         st.sigma[j] = -side
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def leave_wall(st, j, friction):
     """The wall on st.side[j] stops holding unit j, which leaves it at its floor's speed: free, its gap search
     escaping that wall; with friction it slides away from the wall, its slide search escaping s' = 0."""
@@ -257,20 +257,20 @@ def leave_wall(st, j, friction):
         st.escape_v[j] = -1
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def rebound(st, j):
     """Unit j rebounds from the wall on st.side[j]: free, its gap search escaping that wall."""
     st.mode[j] = MODE_FREE
     st.escape[j] = st.side[j]
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def hold(st, j):
     """The wall on st.side[j] holds unit j: it moves with its floor until the wall lets go."""
     st.mode[j] = MODE_STUCK
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def start_slide(st, j, sigma):
     """Friction stops holding unit j on its floor: it slides with sign sigma, its slide search escaping s' = 0."""
     st.mode[j] = MODE_FREE
@@ -278,7 +278,7 @@ def start_slide(st, j, sigma):
     st.escape_v[j] = -1
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def slide_with(st, j, rel):
     """Friction opposes unit j's motion rel relative to its floor, which is not zero: it slides with the sign of rel,
     its slide search starting away from s' = 0."""
@@ -286,7 +286,7 @@ def slide_with(st, j, rel):
     st.escape_v[j] = 0
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def slip(st, j, rel):
     """Friction held unit j on its floor, and the floor's velocity jumped under it (an impulse friction cannot pass
     on): it slides, at rel relative to the floor."""
@@ -294,13 +294,13 @@ def slip(st, j, rel):
     slide_with(st, j, rel)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def rest_on_floor(st, j):
     """Unit j's slide stops: friction holds it on its floor, if it can (floor_decision)."""
     st.mode[j] = MODE_FLOOR
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def record_impact(row, t, unit, side, x, before, after, stuck, impulse):
     """One impact's record (layout.R_*): its time, unit and wall, the floor's place, the floor's and the unit's
     velocities before and after (two pairs), whether the unit stuck, and Newton's impulse (a plastic end is not in
@@ -315,7 +315,7 @@ def record_impact(row, t, unit, side, x, before, after, stuck, impulse):
     row[L.R_IMPULSE] = impulse
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def note_penetration(diag, pen, roundoff):
     """Keep a wall event's penetration pen (how far past its wall the unit is when the event is applied): the
     deepest (layout.D_PEN), and the deepest beyond `roundoff`, the round-off of the positions it is read from
@@ -331,7 +331,7 @@ def note_penetration(diag, pen, roundoff):
 STALL_EVENTS, STALL_SPAN = 1000, 1e-9  # this many events within this fraction of a period: no progress
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def event_cap_reached(t, p, clock):
     """Count the event in its period and in the run; layout.STOP_CAP past the cap per period, layout.STOP_STALL
     when STALL_EVENTS events in a row took less than STALL_SPAN of a period (a loop that makes no progress: a bug,

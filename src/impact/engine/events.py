@@ -34,7 +34,7 @@ TAYLOR_PIECES = 16  # ... and over at most this many pieces of a segment, each f
 _FINISHED, _GAVE_UP, _STACK_FULL = 0, 1, 2  # how a peak search ended
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def raise_peak(peak, peak_t, share, m, value, at):
     """Monitor m's new running peak, value at time at, written for every monitor sharing it: the members of a group
     of which only the largest peak is certified hold one running peak, so that the group's largest settles a
@@ -192,7 +192,7 @@ def _leave_boundary(kap, kpow, c, p, lo, hi, tau_max, escape, delta, out):
     return te
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _touch(te, escape, steps, out):
     """The escape meets its edge again at te: a grazing contact, for first_exit to report (returns -1)."""
     out[0] = te
@@ -202,7 +202,7 @@ def _touch(te, escape, steps, out):
     return -1.0
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _behind_edge(ga, dga, gb, dgb, w, m2, m3, m4, limit):
     """g certified below limit on [0, w] from its values and slopes at both ends, by any of the module's
     three bounds (g's second, third and fourth derivatives bounded by m2, m3, m4)."""
@@ -213,7 +213,7 @@ def _behind_edge(ga, dga, gb, dgb, w, m2, m3, m4, limit):
     return _hermite_inside(ga, dga, gb, dgb, w, m4, -np.inf, limit)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _rounding(kpow, c, p):
     """The round-off of h's first three derivatives at 0, from the sizes of their terms (bound_tab at 0)."""
     return (16.0 * _EPS * bound_tab(kpow, c, p, 1, 0.0), 16.0 * _EPS * bound_tab(kpow, c, p, 2, 0.0),
@@ -230,7 +230,7 @@ def _time_to_travel(width, speed, m2):
     return 2.0 * width / (speed + math.sqrt(speed * speed + 2.0 * m2 * width))
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _one_sign(d0, d1, m3, w):
     """+1 / -1 when h' is certified positive / negative on an interval of width w with end slopes d0, d1."""
     spread = m3 * w * w / 8.0
@@ -241,7 +241,7 @@ def _one_sign(d0, d1, m3, w):
     return 0
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _hermite_inside(h0, d0, h1, d1, w, m4, lo, hi):
     """h certified inside (lo, hi) on [0, w]: the cubic Hermite interpolant's extremes, widened by its error
     bound m4 w^4 / 384 and by the round-off of forming it."""
@@ -272,7 +272,7 @@ def _hermite_inside(h0, d0, h1, d1, w, m4, lo, hi):
     return top + err < hi and bot - err > lo
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _step_guess(margin, dh, h, lo, hi, m2, m3, m4):
     """A first step: the longest of the spans each certificate can be expected to accept, but no farther
     than a little past where the slope would take h to the wall it heads for (there the step finds the
@@ -381,7 +381,7 @@ def _ends(kap, ek, c, p, big_t):
     return h0, d0, h1, d1
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _probe(kap, c, p, t, peak, at):
     """h at t, kept as the running peak if larger: returns (peak, where, h'(t))."""
     h, dh = eval2(kap, c, p, t)
@@ -390,7 +390,7 @@ def _probe(kap, c, p, t, peak, at):
     return peak, at, dh
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _push(stack, top, a, b, da, db):
     """An interval [a, b] with its end slopes onto the search's stack; returns the new top."""
     stack[top, 0] = a

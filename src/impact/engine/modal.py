@@ -81,14 +81,14 @@ def mode_weights(kap, wt):
             wt[partner] = 0.0
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def halve(c, wt):
     """The weighted half row of c, in place."""
     for k in range(c.shape[0]):
         c[k] = c[k] * wt[k]
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def halve_from_start(kap, c, p, wt):
     """halve, with p's first two terms taking up what halving moves at tau = 0, so that the half row starts
     where the full row does.
@@ -173,7 +173,7 @@ def modal_slot(s, key, cache, nf, units, mode, mon_rows, mon_kind, mtab, growth)
     mkey[s] = key
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def storey_reach(s, n, vec, reach):
     """Per yielding storey i and mode k of slot s: the modulus of the storey's drift in the mode (its floor's
     position less the one below's), and the size of the two floors' own parts (|re| + |im| each), on which a
@@ -186,14 +186,14 @@ def storey_reach(s, n, vec, reach):
             reach[s, i, 1, k] = abs(top.real) + abs(top.imag) + abs(below.real) + abs(below.imag)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def amplitude_moduli(n, wc, aw):
     """|w_k| of the segment's 2n modal amplitudes (wc[2n:4n], build_segment's scratch)."""
     for k in range(2 * n):
         aw[k] = abs(wc[2 * n + k])
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def monitor_row(w, s, m, n, monitors, r0, r1, harmonic):
     """Coefficient row of monitor m, into w.cm and w.pm, from the modal amplitudes wc[2n:4n] (the harmonic slots
     from C); w: bundles.SegmentWork."""
@@ -224,7 +224,7 @@ def monitor_row(w, s, m, n, monitors, r0, r1, harmonic):
         pm[3] = 0.0
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def end_values(ek, c, p, big_t):
     """h(0) and h(T) of a row, from ek = exp(kap T)."""
     h0 = p[0]
@@ -236,7 +236,7 @@ def end_values(ek, c, p, big_t):
     return h0, h1
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def curvature_bound(w, s, m, n, big_t, harmonic):
     """Bound on |h''| over [0, T] of monitor m's (halved) row w.cm, w.pm: the tabulated modal part, then the rest."""
     aw, wt, cm, pm, kpow = w.aw, w.wt, w.cm, w.pm, w.kpow
@@ -251,7 +251,7 @@ def curvature_bound(w, s, m, n, big_t, harmonic):
     return acc + poly_bound(pm, 2, big_t)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def square_integral(c, p, wt, pair, single, big_t):
     """Integral over [0, T] of h^2 for a full (not halved) row h, the outer sums halved by the weights."""
     quad = 0.0 + 0.0j
@@ -270,7 +270,7 @@ def square_integral(c, p, wt, pair, single, big_t):
     return quad.real + 2.0 * cross.real + poly_integral(p, p, big_t)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def integrate_modal(w, s, n, tau, units, record, r0, r1, from_state):
     """Exact work of a record load, viscous dissipation and stuck time over [0, tau], from the modal tables.
 

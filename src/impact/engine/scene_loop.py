@@ -6,7 +6,7 @@ monitors exactly over the segment, moves the state to the segment's end and
 resolves the events found there (every row whose event falls at that instant).
 
 Arrays travel in the named bundles of :mod:`impact.engine.bundles`; the steps
-inlined on every segment take one structref of them, SegmentWork (see that
+on every segment take one structref of them, SegmentWork (see that
 module on why).  Optional parts arrive as their own arguments, None when
 absent, and numba prunes them at compile time: `springs` (PID and TMD units),
 `fric` (Coulomb friction under CID units), `harm` (a harmonic load),
@@ -164,7 +164,7 @@ from impact.engine.segment import (
 _ROUND_TOL = 1e-13  # 450 eps: the round-off of a difference of rows, relative to their terms' size
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _difference_row(C, P, a, b, cs, ps):
     """Row a less row b into cs, ps (b < 0: the ground, nothing to take away): a unit's gap row (the unit less
     its floor) or a storey's drift row (its floor less the one below).  Returns the size of row b's terms at
@@ -185,7 +185,7 @@ def _difference_row(C, P, a, b, cs, ps):
     return size
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _contact_tol(gap, row_bound, floor_size):
     """A unit's contact tolerance: CONTACT_TOL of its gap row's terms and gap, but never below _ROUND_TOL of the
     unit's and its floor's own rows, since the gap row is their difference and is rounded on their size
@@ -206,7 +206,7 @@ def _unit_level(j, units, springs, fric):
     return level
 
 
-@njit(cache=True)  # not inlined: inside run_scene's loop it cost a 4-unit CID 12 % (registers, not work)
+@njit(cache=True)
 def _still_leaving(j, nf, units, mode, escape, q, v):
     """Unit j left a wall (escape) and, when the segment ended at another unit's event, is still on it to
     round-off of its gap and not moving back: it keeps leaving (a search from the wall without its escape
@@ -220,7 +220,7 @@ def _still_leaving(j, nf, units, mode, escape, q, v):
     return on_wall and escape[j] * (v[nf + j] - v[f]) <= 0.0
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _all_free(mode, escape):
     """Every unit free and none leaving a wall: the configuration clear_step's tables are made for."""
     for j in range(mode.shape[0]):
@@ -229,7 +229,7 @@ def _all_free(mode, escape):
     return True
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _storeys_settled(yld):
     """No storey leaving its yield surface or its turning point (an elastic building's always): the state
     clear_step's tables start from, on whichever branches."""
@@ -240,7 +240,7 @@ def _storeys_settled(yld):
     return True
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _same_unit_state(j, nf, units, springs, w):
     mode, side, sigma, escape, escape_v, C, P = w.mode, w.side, w.sigma, w.escape, w.escape_v, w.C, w.P
     i = j - 1
@@ -258,7 +258,7 @@ def _same_unit_state(j, nf, units, springs, w):
     return True
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _clear_of_walls(kpow, ek, c, p, lo, hi, big_t, delta):
     """Certified: h stays inside (lo, hi) over [0, T] and ends farther than delta from both walls.
 
@@ -280,7 +280,7 @@ def _clear_of_walls(kpow, ek, c, p, lo, hi, big_t, delta):
 SIDE_FOUND, SIDE_KEPT = 2, 3  # _earliest: the end of the band the search crossed, or the row's entry untouched
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _earliest(out, best, ties, r, kind, side, ev_t, ev_side, ev_kind):
     """Row r's event found by a search (out) becomes its event if it comes first (or ties, with ties); returns the
     earliest time so far.  side: the event's side (SIDE_FOUND: the end of the band the search crossed, SIDE_KEPT:
@@ -296,7 +296,7 @@ def _earliest(out, best, ties, r, kind, side, ev_t, ev_side, ev_kind):
     return best
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _band_exit(w, lo, hi, size, escape, horizon, ek_tau):
     """The certified first exit before `horizon` of the halved row in w.cs, w.ps from the band (lo, hi), into
     w.found; `size` is what the row was rounded on (_difference_row).  When ek_tau is the horizon, a row clear of
@@ -309,7 +309,7 @@ def _band_exit(w, lo, hi, size, escape, horizon, ek_tau):
         first_exit(w.kap, kpow, cs, ps, lo, hi, horizon, escape, delta, out)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _cleared(out):
     """A search's output for a row _clear_of_walls settles: no event, one step."""
     out[0] = np.inf
@@ -324,7 +324,7 @@ def _cleared(out):
 _REACH_TOL = 1e-8
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _modal_reach(w, s, i, d):
     """Storey i's drift row in slot s from its reach (modal.storey_reach), without building it: with a_k = |d_k w_k|
     (d_k: the storey's drift in mode k, w_k: the segment's modal amplitude), the sums of a_k |kap_k|^n for n = d,
@@ -343,7 +343,7 @@ def _modal_reach(w, s, i, d):
     return s0, s1, s2, size
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _storey_poly(P, i):
     """The drift row's polynomial terms of tau^2 and tau^3 (a zero mode's particular solution)."""
     if i == 0:
@@ -351,7 +351,7 @@ def _storey_poly(P, i):
     return P[i, 2] - P[i - 1, 2], P[i, 3] - P[i - 1, 3]
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _storey_clear(w, s, i, lo, hi, big_t):
     """Whether storey i's drift stays inside (lo, hi) over [0, T], farther from both ends than its row's round-off,
     certified from the state and the slot's reach without building the row.
@@ -373,7 +373,7 @@ def _storey_clear(w, s, i, lo, hi, big_t):
     return max(u0, end) + curve + slack < hi and min(u0, end) - curve - slack > lo
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _turning_clear(w, s, i, sign, big_t):
     """Whether yielding storey i's drift velocity keeps its branch's sign over [0, T], farther from zero than its
     row's round-off, certified from the state and the slot's reach without building the row: it starts at
@@ -390,7 +390,7 @@ def _turning_clear(w, s, i, sign, big_t):
     return du0 - m2 * big_t - 0.13 * m3 * big_t * big_t - slack > 0.0
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _sign_exit(w, sign, escape_v, horizon, ek_tau, may_clear):
     """Where the halved row in w.cs, w.ps stops moving in the direction `sign` (sign row' >= 0 while it keeps
     on): the certified first exit of sign row' from [0, inf) before `horizon`, into w.found (the velocity row
@@ -411,13 +411,13 @@ def _sign_exit(w, sign, escape_v, horizon, ek_tau, may_clear):
         first_exit(kap, kpow, cq, pq, 0.0, np.inf, horizon, escape_v, dv, out)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _book_search(diag, out):
     diag[D_GRAZE] += out[2]
     diag[D_STEPS] += out[3]
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def search_constraints(w, s, units, springs, fric, yld, tau_max, ramp, ek_tau, harmonic):
     """The next event of every row of the constraint table (bundles.Events: the damper units' rows first, a
     yielding building's storeys' after them), each row searched up to the earliest event found so far; returns
@@ -445,7 +445,7 @@ def search_constraints(w, s, units, springs, fric, yld, tau_max, ramp, ek_tau, h
     return found
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _search_unit(w, nf, j, units, springs, fric, r0, r1, best, ek_tau):
     """Unit j's row in its contact mode: a free unit's gap within its walls (and a sliding unit's slide keeping
     its direction), a unit held on a wall by a contact force that pushes, a unit friction holds on its floor by a
@@ -503,7 +503,7 @@ def _search_unit(w, nf, j, units, springs, fric, r0, r1, best, ek_tau):
     return best
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _search_storey(w, s, yld, i, r, best, ek_tau, harmonic):
     """Storey i's row (row r of the table) on its branch: an elastic storey's drift u stays within d_y of its
     plastic offset p (and within the collapse limit); a yielding one's drift velocity keeps the branch's sign
@@ -532,7 +532,7 @@ def _search_storey(w, s, yld, i, r, best, ek_tau, harmonic):
     return _earliest(out, best, True, r, EV_COLLAPSE if at_limit else EV_YIELD, side, w.ev_t, w.ev_side, w.ev_kind)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _search_yielding_storey(w, s, yld, i, r, best, ek_tau, harmonic):
     """A yielding storey's row: its drift velocity keeps the branch's sign, its drift stays within the collapse
     limit.  Each is cleared from the storey's reach first (_turning_clear, _storey_clear), and the row is built
@@ -560,7 +560,7 @@ def _search_yielding_storey(w, s, yld, i, r, best, ek_tau, harmonic):
     return best
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _storey_row(w, i):
     """Storey i's drift row, halved, into w.cs, w.ps; returns the size it was rounded on (_difference_row)."""
     size = _difference_row(w.C, w.P, i, i - 1, w.cs, w.ps)
@@ -568,7 +568,7 @@ def _storey_row(w, i):
     return size
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def at_instant(tau_ev):
     """The latest event time that still falls at the instant tau_ev (to 16 ulps)."""
     return tau_ev * (1.0 + 16.0 * 2.220446049250313e-16) + 1e-300
@@ -586,7 +586,7 @@ def name_stop(tau_ev, events, nu, diag):
             return
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _stop_at(element, kind, side, diag):
     diag[D_STOP_ELEMENT] = element
     diag[D_STOP_EVENT] = kind
@@ -621,7 +621,7 @@ def resolve_storeys(tau_ev, yld, events, nu, q, v, diag):
             _unload(yld, i, u)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _unload(yld, i, u):
     side = yld.branch[i]
     yld.branch[i] = BRANCH_ELASTIC
@@ -651,7 +651,7 @@ def storey_jumps(yld, q, v, diag, impulses):
             diag[D_YIELDS] += 1.0
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _on_surface(yld, i, q):
     """Storey i's elastic drift on the yield surface it left (yld.escape), to the contact tolerance of its floors."""
     u = storey_drift(q, i)
@@ -660,7 +660,7 @@ def _on_surface(yld, i, q):
                                                                                     + lower)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def storeys_after_segment(yld, q, v):
     """A storey that left its yield surface keeps its escape only while it is still on it and not moving back out
     (as a unit leaving a wall, _still_leaving); the drift-velocity searches start afresh."""
@@ -671,7 +671,7 @@ def storeys_after_segment(yld, q, v):
         escape_v[i] = 0
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def growth_rate(cache, s):
     """The largest Re kap of slot s's modes when one grows (a storey whose P-delta outweighs its stiffness), else 0:
     the run keeps such a segment within 1 / rate, over which every exponential stays within e of its start."""
@@ -681,7 +681,7 @@ def growth_rate(cache, s):
     return rate
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def grow_powers(kap, kpow):
     """|kap|^n times e for a growing mode: bound_tab's bounds over a segment within 1 / growth_rate."""
     for k in range(kap.shape[0]):
@@ -690,7 +690,7 @@ def grow_powers(kap, kpow):
                 kpow[n, k] *= math.e
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def integrate_segment(w, tau, building, units, springs, harm, record, load_at):
     """Exact work of the load, viscous dissipation and stuck time over [0, tau] (tables: integral_tables);
     load_at: (theta0, r0, r1), the load at the segment's start (segment_load).  Without a harmonic load the
@@ -777,7 +777,7 @@ def integrate_segment(w, tau, building, units, springs, harm, record, load_at):
             diag[D_STUCKTIME] += tau
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def damped_start(cb, v, a):
     """Row a of the damping matrix times the velocities: the damping force's start value."""
     out = 0.0
@@ -817,7 +817,7 @@ def step_tables(s, key, tau, dt, kap, ek, pair, single, ramp, dtab):
             ramp[k, l] = dramp[s, k, l]
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def monitor_modal(w, s, n, tau, t, t_win, monitors, ramp, harmonic, yielding):
     """Certified peaks of every monitor over the segment, and the roof's square integrated over the window from
     t_win (inf: a run whose window no one reads); ramp: (r0, r1), the record's value at the segment's start and
@@ -865,7 +865,7 @@ def monitor_modal(w, s, n, tau, t, t_win, monitors, ramp, harmonic, yielding):
                 raise_peak(mon_peak, mon_peak_t, share, m, peak, t + at)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def window_square(w, tau, t, t_win, yielding):
     """The first monitor's (the roof's) square integrated over the part of the segment inside the window.
 
@@ -1236,7 +1236,7 @@ def _initial_units(units, fric, st):
                     slide_with(st, j, rel)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def segment_load(p, record, harm, t, t_end):
     """(r0, r1, theta0, t_next, tau_max): the load on the segment from t and where it may end at the latest."""
     r0 = 0.0
@@ -1254,7 +1254,7 @@ def segment_load(p, record, harm, t, t_end):
     return r0, r1, theta0, t_next, tau_max
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def integrate_energy(w, s, tau, building, units, springs, harm, record, load_at, yielding):
     """The energy terms over the segment: from the modal tables under a record, from the rows under a harmonic;
     yielding: the building's storeys can yield (its load's work is taken from the state, integrate_modal)."""
@@ -1264,7 +1264,7 @@ def integrate_energy(w, s, tau, building, units, springs, harm, record, load_at,
         integrate_segment(w, tau, building, units, springs, harm, record, load_at)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def move_to_end(w, building, units, springs, fric, yld, tau, s, wave, from_itself):
     """The state at the segment's end, the friction and plastic work on the way, and the largest stored energy.
 
@@ -1411,7 +1411,7 @@ def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out)
     # atomic reference count at every step they are handed to.  The SegmentWork holds what run_scene owns
     # (the workspace, the state, the clear step's scratch); the caller holds the arguments
     ws_b, st_b, out_b, cache = borrowed(ws), borrowed(st), borrowed(out), borrowed(cache)
-    # the steps inlined on every segment take one structref of the arrays they work in (impact.engine.bundles)
+    # the steps on every segment take one structref of the arrays they work in (impact.engine.bundles)
     w = _segment_work(ws_b, st_b, out_b, cache, load_vec, (ws, st, clear_owned))
     kap, C, P, ek, pair, single, ramp, kpow = ws_b.seg
     qs, vs, aw, wt = ws_b.vecs.qs, ws_b.vecs.vs, w.aw, w.wt
@@ -1421,8 +1421,8 @@ def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out)
     q, v = st_b.q, st_b.v
     diag, ts, samples = out_b.diag, out_b.ts, out_b.samples
     peaks = (out_b.peak, out_b.peak_t, monitors.cap, monitors.share, out_b.x2)
-    # the optional parts, borrowed to the compiled steps (None stays None); the inlined steps take the run's own
-    # arguments, because numba prunes a branch on `is None` only on a function's own argument
+    # the optional parts, borrowed to the compiled steps (None stays None); each step prunes its branches on
+    # `is None` on its own argument
     springs_b, fric_b, harm_b, record_b, yld_b = borrowed(springs), borrowed(fric), borrowed(harm), \
         borrowed(record), borrowed(yld)
     # the compiled steps at an event's instant take the state and their scratch borrowed too
@@ -1448,12 +1448,12 @@ def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out)
     if clear is not None:
         clear_b, clear_scratch = borrowed(clear), borrowed(clear_owned)
     while t < t_end:
-        if clear is not None and _all_free(mode, escape) and _storeys_settled(yld):
+        if clear is not None and _all_free(mode, escape) and _storeys_settled(yld_b):
             t = clear_steps(clear_b, clear_scratch, (q, v, diag), peaks, (p, record_b),
                             (t, t_end, t_square, ts[its] if its < ts.shape[0] else np.inf), building, units,
                             springs_b, yld_b)
-        r0, r1, theta0, t_next, tau_max = segment_load(p, record, harm, t, t_end)
-        key = scene_key(mode, yld)
+        r0, r1, theta0, t_next, tau_max = segment_load(p, record_b, harm_b, t, t_end)
+        key = scene_key(mode, yld_b)
         if key != slot_key:
             s = config_slot(building, units, springs_b, yld_b, load_vec, omega if harm is not None else 0.0, mode, cache,
                             cursor)
@@ -1465,7 +1465,7 @@ def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out)
         if rate > 0.0 and tau_max * rate > 1.0:
             tau_max = 1.0 / rate
             t_next = t + tau_max
-        build_segment(w, s, units, springs, fric, yld, harm is not None, (theta0, r0, r1), omega)
+        build_segment(w, s, units, springs_b, fric_b, yld_b, harm is not None, (theta0, r0, r1), omega)
         if key != kpow_key:
             kappa_powers(kap, kpow)
             if rate > 0.0:
@@ -1480,7 +1480,7 @@ def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out)
         diag[D_SEGMENTS] += 1.0
         n = cache.size[s]
         amplitude_moduli(n, wc, aw)
-        best = search_constraints(w, s, units, springs, fric, yld, tau_max, (r0, r1),
+        best = search_constraints(w, s, units, springs_b, fric_b, yld_b, tau_max, (r0, r1),
                                   tab_tau if key == tab_key else -1.0, harm is not None)
         event = best <= tau_max and best < np.inf
         tau = best if event else tau_max
@@ -1497,23 +1497,23 @@ def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out)
         if from_itself and (record is None or tau != p[P_REC_DT]):
             flow_tables(kap, ek, tau, single)  # a whole sample step's come with step_tables
         if not on_branch:
-            integrate_energy(w, s, tau, building, units, springs, harm, record, (theta0, r0, r1), yld is not None)
+            integrate_energy(w, s, tau, building, units, springs_b, harm_b, record_b, (theta0, r0, r1), yld is not None)
         else:
             # a storey yielding: the rows integrate.  A zero mode's particular velocity is not constant, which the
             # modal tables assume; and beside a stiff pendulum the tables lost 3e-9 of a probe scene's energy
             # balance on the yielding branches, the rows 2.6e-10 (tests/test_exactness.py, yielding probe 97)
-            integrate_segment(w, tau, building, units, springs, harm, record, (theta0, r0, r1))
+            integrate_segment(w, tau, building, units, springs_b, harm_b, record_b, (theta0, r0, r1))
         monitor_modal(w, s, n, tau, t, t_square, monitors, (r0, r1), harm is not None, yld is not None)
         if its < ts.shape[0]:
             its = sample_segment(kap, C, P, t, tau, ts, its, samples, qs, vs)
-        move_to_end(w, building, units, springs, fric, yld, tau, s, (harm is not None, theta0, omega), from_itself)
+        move_to_end(w, building, units, springs_b, fric_b, yld_b, tau, s, (harm is not None, theta0, omega), from_itself)
         t = t_next if not event else t + tau
         for j in range(nu):
             if escape[j] != 0 and not _still_leaving(j, nf, units, mode, escape, q, v):
                 escape[j] = 0
             escape_v[j] = 0
         if yld is not None:
-            storeys_after_segment(yld, q, v)
+            storeys_after_segment(yld_b, q, v)
         if not event:
             continue
         stop = event_cap_reached(t, p, clock)
@@ -1527,7 +1527,7 @@ def run_scene(model, springs, fric, harm, record, yld, clear, start, cache, out)
         slot_key = -1  # settle may have filled (and so replaced) cache slots
         tab_key = -1
         kpow_key = -1
-    diag[D_E1] = energy(building, units, springs, yld, nf, q, v)
+    diag[D_E1] = energy(building, units, springs_b, yld_b, nf, q, v)
     diag[D_TEND] = t
     for i in range(nf + nu):
         out.q[i] = q[i]

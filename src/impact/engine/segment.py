@@ -41,7 +41,7 @@ FLOW_PHI0, FLOW_PHI2 = 2 * NPOLY, 2 * NPOLY + 1
 # a load record between its samples
 # ----------------------------------------------------------------------------
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def record_value(record, p, t):
     """(r0, r1, t_next): the record's value and slope at t, and its next sample time."""
     t0 = p[P_REC_T0]
@@ -67,7 +67,7 @@ def record_value(record, p, t):
     return record[i] + slope * (t - t_i), slope, t_next
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def whole_step(p, t, t_next, t_end):
     """The length of the record's step from t to t_next: the record's dt where the step is a whole sample step
     (not the difference of two rounded times, so that every such step shares one set of tables), else the
@@ -84,13 +84,13 @@ def whole_step(p, t, t_next, t_end):
 
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def poly_at(p, tau):
     """A row's cubic at tau, in the one order of operations every step reads it in (the same bits everywhere)."""
     return p[0] + tau * (p[1] + tau * (p[2] + tau * p[3]))
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def poly_slope_at(p, tau):
     """The cubic's slope at tau, likewise."""
     return p[1] + tau * (2.0 * p[2] + 3.0 * tau * p[3])
@@ -213,7 +213,7 @@ def derivative_row(kap, c, p, cd, pd):
     pd[3] = 0.0
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def state_from_exp(kap, ek, C, P, tau, q, v):
     """Positions and velocities of every degree of freedom at tau, from ek = exp(kap tau)."""
     nt = kap.shape[0]
@@ -231,7 +231,7 @@ def state_from_exp(kap, ek, C, P, tau, q, v):
         v[i] = dx + p[1] + tau * (2.0 * p[2] + 3.0 * tau * p[3])
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def flow_change(w, s, tau, harmonic, theta0):
     """The change of the reduced state over [0, tau] of the segment build_segment set up in slot s, each mode
     advanced from the state itself: eta(tau) - eta(0) = (lam eta(0) + a) phi1 + b phi2, with a + b t the mode's
@@ -274,7 +274,7 @@ def flow_change(w, s, tau, harmonic, theta0):
             wf[DX + i] += (vec[s, i, k] * d).real
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def take_flow_state(w, s, tau, harmonic, theta0, omega, units, nf):
     """The state at tau from flow_change: the reduced degrees of freedom, the units their floor holds (its state and
     their offset, as their rows are the floor's), the free units without a spring from their polynomial rows, and
@@ -306,7 +306,7 @@ def take_flow_state(w, s, tau, harmonic, theta0, omega, units, nf):
             v[nf + j] = v[nf + j - 1]
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _same_row(C, P, a, b):
     """Whether rows a and b are one row, bit for bit."""
     for k in range(C.shape[1]):
@@ -331,7 +331,7 @@ def config_key(mode):
     return key
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def scene_key(mode, yld):
     """The configuration's key: the units held by their floor (config_key) and, after them, the storeys on a
     yielding branch (whose stiffness is b k); up or down does not change the stiffness, only the constant force."""
@@ -613,7 +613,7 @@ def config_slot(building, units, springs, yld, load_vec, omega, mode, cache, cur
 # a segment
 # ----------------------------------------------------------------------------
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def build_segment(w, s, units, springs, fric, yld, harmonic, load_at, omega):
     """Coefficient rows w.C, w.P (over exponents w.kap) of every degree of freedom from the state (w.q, w.v) in
     configuration slot s of w.cache; w: bundles.SegmentWork.
@@ -736,7 +736,7 @@ def build_segment(w, s, units, springs, fric, yld, harmonic, load_at, omega):
             P[row, 3] = a1 / 6.0
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _storey_constants(yld, q, wf, g0):
     """Each storey's constant force onto the reduced load at wf[g0:]: its restoring force is k u - (1 - b) k p on
     the elastic branch and b k u + s (1 - b) k d_y on a yielding one (s = +-1), whose k u and b k u are in K."""
@@ -751,7 +751,7 @@ def _storey_constants(yld, q, wf, g0):
             wf[g0 + i - 1] += r0
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _load_over_mass(n, s, mred, wf, at):
     """The reduced load g0, g1 that build_segment left in wf[:n], wf[n:2n], each over its mass, into wf[at:at + 2n]
     (one division per degree of freedom, not one per mode)."""
@@ -760,7 +760,7 @@ def _load_over_mass(n, s, mred, wf, at):
         wf[at + n + r] = wf[n + r] / mred[s, r]
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _modal_load(n, s, k, vinv, wf, at):
     """Mode k's share (a, b) of the load g0 + g1 tau, given over the masses at wf[at:at + 2n] (_load_over_mass)."""
     a = 0.0 + 0.0j
@@ -771,7 +771,7 @@ def _modal_load(n, s, k, vinv, wf, at):
     return a, b
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _modal_particular(n, s, lam, vec, vinv, mred, wf):
     """The particular solution of M q'' + C q' + K q = g0 + g1 tau through the modes, for any K (a singular one too).
 
@@ -813,7 +813,7 @@ def same_unit(units, springs, i, j):
     return True
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def _copy_identical_rows(units, springs, mode, nf, q, v, C, P):
     """Identical spring units in identical states move identically: give them the same row, bit for bit.
 
@@ -1047,7 +1047,7 @@ def int_prod(big_t, pair, single, ca, pa, cb, pb):
     return acc.real + poly_integral(pa, pb, big_t)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def poly_integral(pa, pb, big_t):
     """Integral over [0, T] of the product of two cubic polynomials."""
     out = 0.0
@@ -1062,7 +1062,7 @@ def poly_integral(pa, pb, big_t):
                 out += pa[i] * pb[j] * tp / (i + j + 1)
     return out
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def energy(building, units, springs, yld, nf, q, v):
     """Kinetic plus stored energy of the scene (relative coordinates)."""
     mb, kb, _ = building
@@ -1086,13 +1086,13 @@ def energy(building, units, springs, yld, nf, q, v):
     return e
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def storey_drift(x, i):
     """Storey i's drift (or drift velocity, from velocities): its floor less the one below (the ground for i = 0)."""
     return x[i] - x[i - 1] if i > 0 else x[0]
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def storey_energy(yld, q):
     """What a yielding building's storeys store: b k u^2 / 2 in the hardening spring, (1 - b) k (u - p)^2 / 2 in the
     perfectly plastic element and -P u^2 / (2 h) of gravity through P-delta; on a yielding branch u - p is s d_y."""
@@ -1105,7 +1105,7 @@ def storey_energy(yld, q):
     return e
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def has_rigid_mode(cache, s):
     """Whether slot s has a zero mode (_snap_rigid_modes), whose particular solution is quadratic."""
     for k in range(2 * cache.size[s]):
@@ -1114,7 +1114,7 @@ def has_rigid_mode(cache, s):
     return False
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def storey_gravity(yld, q):
     """P u^2 / h summed over the storeys: twice the size of P-delta's energy, -P u^2 / (2h), which storey_energy
     subtracts (what the energy balance's scale adds back, so that the scale counts it by its size)."""
@@ -1126,7 +1126,7 @@ def storey_gravity(yld, q):
     return e
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def plastic_flow(yld, q, diag):
     """A yielding storey's offset follows its drift (u - p = s d_y), and the perfectly plastic element's force
     s (1 - b) k d_y does the plastic work (1 - b) k d_y |dp|, exact since s u' >= 0 all along the segment (or the
