@@ -21,7 +21,7 @@ $(STAMP): pyproject.toml constraints.txt
 	touch $(STAMP)
 
 $(COMPILED): $(STAMP)
-	@echo "compiling the engine's kernels into numba's cache, once (a quarter of an hour: the README has the measured time)"
+	@echo "compiling the engine's kernels into numba's cache, once (minutes: the README has the measured time)"
 	$(BIN)/impact compile > /dev/null
 	touch $(COMPILED)
 
@@ -46,8 +46,9 @@ debug: $(STAMP)
 	$(BIN)/snakemake $(TARGET) --force --cores 1 --skip-script-cleanup $(SNAKEMAKE_ARGS)
 	@echo "the job's script, to run alone: $$(ls -t .snakemake/scripts/*.py | head -1)"
 
+# one worker a core (pytest-xdist), each test file on one worker so that its module fixtures run once
 test: $(COMPILED) chromium
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n $(CORES) --dist loadfile
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks workflow/scripts tools

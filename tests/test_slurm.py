@@ -5,8 +5,10 @@ apt-installs slurmctld, slurmd and munge, and starts them without accounting). T
 then runs twice, each in its own copy of the workflow: once through the SLURM executor, as users
 run it (`snakemake --profile profiles/slurm`, plus options that make a test fast), and once on
 this machine (`--cores 2`). The two must give identical datasets (apart from their creation
-time), the same table and every figure. The wall time of each run is printed and written to a
-JSON file under the test's temporary folder.
+time), the same table and every figure. Both load the kernels the checkout compiled, but for the
+paper loop's, which the SLURM run's sweep jobs compile into a cache of their own, side by side
+under the compile lock. The wall time of each run is printed and written to a JSON file under
+the test's temporary folder.
 
 Without root, without the script, or when the script cannot bring the cluster up (no package
 access, say), the SLURM tests are skipped with the reason; IMPACT_REQUIRE_SLURM=1 turns these
@@ -117,14 +119,57 @@ def _copy_workflow(dest: Path) -> Path:
     return copy_workflow(ROOT, dest)
 
 
-def _env(work: Path, numba_cache: Path) -> dict:
+def _env(work: Path, numba_cache: Path | None) -> dict:
     """Each run imports `impact` from its own copy (not from the checkout, which may change while
-    the test runs) and compiles its kernels into its own empty numba cache. sbatch passes the
-    environment on (--export=ALL), so SLURM jobs see the same."""
+    the test runs). The SLURM run keeps its kernels in a numba cache of its own (NUMBA_CACHE_DIR;
+    sbatch passes the environment on, --export=ALL); the local run (numba_cache None) keeps them
+    beside its sources."""
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join([str(work / "src"), *filter(None, [env.get("PYTHONPATH")])])
-    env["NUMBA_CACHE_DIR"] = str(numba_cache)
+    env.pop("NUMBA_CACHE_DIR", None)
+    if numba_cache is not None:
+        env["NUMBA_CACHE_DIR"] = str(numba_cache)
     return env
+
+
+# the kernels the SLURM run's sweep jobs compile themselves, side by side under the compile lock: the paper loop
+# and its dense output (a minute or so); every other kernel each run loads, compiled by the checkout, since
+# compiling the scene loop's specialisations again would cost the suite a quarter of an hour and test nothing more
+SLURM_COMPILES = ("paper_loop.", "sampler.", "compiled-paper-")
+
+_CACHE_FOLDERS = """
+import json
+from impact.engine.scene_loop import run_scene
+from impact.rig.simulator import _rig_run
+print(json.dumps({f.py_func.__module__.rsplit(".", 1)[0]: f._cache._cache_path for f in (run_scene, _rig_run)}))
+"""
+
+
+def _with_compiled_kernels(work: Path, env: dict, leave_out: tuple[str, ...] = ()) -> Path:
+    """The checkout's compiled kernels where the copy `work`, run with `env`, looks for them, but for the files
+    named `leave_out`. numba knows a source file by its size and modification time, which the copy keeps
+    (shutil.copy2); the engine's stamps go with them, so that no job takes them for stale."""
+    from impact.engine import jitcache, scene_loop
+    from impact.rig import simulator
+
+    out = subprocess.run([sys.executable, "-c", _CACHE_FOLDERS], env=env, capture_output=True, text=True,
+                         check=True, timeout=HANG_GUARD_S)
+    theirs = json.loads(out.stdout)
+    ours = {f.py_func.__module__.rsplit(".", 1)[0]: Path(f._cache._cache_path)
+            for f in (scene_loop.run_scene, simulator._rig_run)}
+    for package, source in ours.items():
+        _copy_files(source, Path(theirs[package]), lambda name: name.endswith((".nbi", ".nbc", ".stamp")), leave_out)
+    # the lock's folder, where each compiled set leaves its stamp (jitcache.compile_lock)
+    lock_folder = Path(env.get("NUMBA_CACHE_DIR") or theirs["impact.engine"])
+    _copy_files(jitcache._cache_dir(), lock_folder, lambda name: name.startswith("compiled-"), leave_out)
+    return work
+
+
+def _copy_files(source: Path, dest: Path, wanted, leave_out: tuple[str, ...]) -> None:
+    dest.mkdir(parents=True, exist_ok=True)
+    for path in source.iterdir():
+        if wanted(path.name) and not path.name.startswith(leave_out):
+            shutil.copy2(path, dest / path.name)
 
 
 def _snakemake(work: Path, env: dict, *args: str) -> tuple[float, str, str]:
@@ -167,18 +212,21 @@ class Runs:
 def runs(slurm_cluster, tmp_path_factory) -> Runs:
     base = tmp_path_factory.mktemp("slurm_vs_local")
     slurm, local = _copy_workflow(base / "slurm"), _copy_workflow(base / "local")
-    numba_slurm, numba_local = base / "numba-cache-slurm", base / "numba-cache-local"
+    numba_slurm = base / "numba-cache-slurm"
+    slurm_env, local_env = _env(slurm, numba_slurm), _env(local, None)
+    _with_compiled_kernels(slurm, slurm_env, leave_out=SLURM_COMPILES)
+    _with_compiled_kernels(local, local_env)
 
     # what users type, plus: poll early, poll with squeue when there is no accounting, and
     # keep every job's SLURM log for the checks below (--configfile last: it takes every word)
     slurm_s, _, slurm_log = _snakemake(
-        slurm, _env(slurm, numba_slurm),
+        slurm, slurm_env,
         "--profile", "profiles/slurm",
         "--slurm-init-seconds-before-status-checks", "5",
         "--slurm-status-command", slurm_cluster.status_command,
         "--slurm-keep-successful-logs",
         "--configfile", SMOKE)
-    local_s, _, _ = _snakemake(local, _env(local, numba_local), "--cores", "2", "--configfile", SMOKE)
+    local_s, _, _ = _snakemake(local, local_env, "--cores", "2", "--configfile", SMOKE)
 
     times = {
         "slurm_run_seconds": round(slurm_s, 1),
@@ -190,7 +238,7 @@ def runs(slurm_cluster, tmp_path_factory) -> Runs:
         "slurm_node_cpus": _node_cpus(),
         "local_cores": 2,
         "machine_cpus": os.cpu_count(),
-        "numba_cache": "empty at the start of both runs",
+        "numba_cache": "the checkout's kernels, but for the SLURM run's paper loop and dense output",
         "config": SMOKE,
     }
     path = base / "wall_times.json"
@@ -351,10 +399,11 @@ def test_jobs_starting_together_share_the_numba_cache(runs):
         assert together >= 2, f"no two sweep jobs ran at the same time: {sweeps}"
     print(f"\n[slurm] at most {together} sweep jobs ran at once on a node of {node_cpus} CPUs")
 
-    # the jobs saw NUMBA_CACHE_DIR (sbatch --export=ALL) and filled one cache there
+    # the jobs saw NUMBA_CACHE_DIR (sbatch --export=ALL) and compiled the kernels left out of it there
     cache = runs.numba_slurm
     assert (cache / "impact-jit.lock").is_file(), sorted(cache.glob("*"))
-    assert list(cache.rglob("*.nbi")) and list(cache.rglob("*.nbc")), sorted(cache.rglob("*"))
+    for left_out in SLURM_COMPILES[:2]:
+        assert list(cache.rglob(f"{left_out}*.nbi")) and list(cache.rglob(f"{left_out}*.nbc")), sorted(cache.rglob("*"))
     # and no job complained: neither its own log nor its SLURM log
     logs = list((runs.slurm / "results" / "logs").rglob("*.log"))
     logs += list((runs.slurm / ".snakemake" / "slurm_logs").rglob("*.log"))
