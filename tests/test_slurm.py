@@ -147,7 +147,7 @@ print(json.dumps({f.py_func.__module__.rsplit(".", 1)[0]: f._cache._cache_path f
 """
 
 
-def _with_compiled_kernels(work: Path, env: dict, leave_out: tuple[str, ...] = ()) -> Path:
+def _with_compiled_kernels(work: Path, env: dict, leave_out: tuple[str, ...] = ()) -> None:
     """The checkout's compiled kernels where the copy `work`, run with `env`, looks for them, but for the files
     named `leave_out`. numba knows a source file by its size and modification time, which the copy keeps
     (shutil.copy2); the engine's stamps go with them, so that no job takes them for stale."""
@@ -164,7 +164,6 @@ def _with_compiled_kernels(work: Path, env: dict, leave_out: tuple[str, ...] = (
     # the lock's folder, where each compiled set leaves its stamp (jitcache.compile_lock)
     lock_folder = Path(env.get("NUMBA_CACHE_DIR") or theirs["impact.engine"])
     _copy_files(jitcache._cache_dir(), lock_folder, lambda name: name.startswith("compiled-"), leave_out)
-    return work
 
 
 def _copy_files(source: Path, dest: Path, wanted, leave_out: tuple[str, ...]) -> None:
