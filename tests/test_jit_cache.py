@@ -43,6 +43,43 @@ def test_two_processes_compiling_at_once_agree(tmp_path):
     assert "compiling" not in third.stderr
 
 
+_SAVING = """
+import sys
+sys.path.insert(0, sys.argv[1])
+import impact.engine.jitcache  # noqa: F401  (serialises numba's index saves)
+import twice
+print(twice.twice._cache._cache_path, flush=True)
+sys.stdin.readline()
+twice.twice(1)
+print("saved", flush=True)
+"""
+
+
+def test_a_save_to_a_cache_index_waits_for_the_folder_lock(tmp_path):
+    """Kernels compiling side by side share the steps they call, so two processes may save one function's index at
+    once; numba reads, extends and rewrites it, so each save must wait for the folder's lock (jitcache)."""
+    import filelock
+
+    (tmp_path / "twice.py").write_text("import numba\n\n@numba.njit(cache=True)\ndef twice(x):\n    return 2 * x\n")
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    proc = subprocess.Popen([sys.executable, "-c", _SAVING, str(tmp_path)], env=env, stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, text=True)
+    folder = Path(proc.stdout.readline().strip())
+    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        with filelock.FileLock(folder / jitcache.FOLDER_LOCK):
+            proc.stdin.write("go\n")
+            proc.stdin.flush()
+            # a compile of this kernel and its save take well under a second unlocked
+            with pytest.raises(subprocess.TimeoutExpired):
+                proc.wait(timeout=5)
+            assert not list(folder.glob("*.nbi"))
+        assert proc.communicate(timeout=HANG_GUARD_S)[0].strip() == "saved"
+    finally:
+        proc.kill()
+    assert proc.returncode == 0 and list(folder.glob("twice.twice-*.nbi"))
+
+
 def _fake_dispatcher(folder):
     return SimpleNamespace(_cache=SimpleNamespace(_cache_path=str(folder)))
 

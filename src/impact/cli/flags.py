@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import functools
 import math
+import os
 from pathlib import Path
 
 from impact import __version__
@@ -304,7 +305,9 @@ def build_parser() -> argparse.ArgumentParser:
     ms.add_argument("--force-ratio", type=_ranged(0, 1e12, lo_open=True), default=DEFAULTS["force_ratio"],
                     help="F0/K")
 
-    sub.add_parser("compile", help="compile every kernel the study runs, once (make setup does)")
+    co = sub.add_parser("compile", help="compile every kernel the study runs, once (make setup does)")
+    co.add_argument("--cores", type=_ranged(1, 256, kind=int), default=len(os.sched_getaffinity(0)),
+                    help="processes compiling side by side, in [1, 256] (default: the cores this process may use)")
 
     va = sub.add_parser("verify-archive", help="re-check a study archive against its MANIFEST.json (exit 1 if any entry differs)")
     va.add_argument("file", help="the archive, results/archive/impact-study-<commit>.tar.gz")

@@ -8,9 +8,12 @@ load stale code.  A stamp of the sources the kernels are compiled from
 (:func:`kernel_sources`), kept beside each cache, catches that and drops the
 cached kernels of that folder once.
 
-:func:`compile_lock` serialises compiling and loading across processes, and is
-where a stale cache is dropped: every call of a cached kernel goes through it
-the first time in a process, and nothing is deleted merely by importing.
+:func:`compile_lock` serialises compiling and loading of one kernel across
+processes (two kernels compile side by side, one a core), and is where a stale
+cache is dropped: every call of a cached kernel goes through it the first time
+in a process, and nothing is deleted merely by importing.  numba's own write
+of a function's cache index is serialised apart (:func:`_serialised_save`),
+since kernels compiled side by side share the steps they call.
 """
 
 from __future__ import annotations
@@ -24,11 +27,14 @@ import sys
 from pathlib import Path
 
 import filelock
+from numba.core import caching as numba_caching
 
 CORE = Path(__file__).parent
 # the stamp's name in a cache folder: one per folder, so two loops caching in one folder share it (with one
 # each, the second loop to load after an edit would purge what the first had just compiled)
 STAMP = "impact-sources"
+# the lock of a whole cache folder, taken briefly: to drop a stale cache, and for each write of a function's index
+FOLDER_LOCK = "impact-jit.lock"
 
 
 # an engine module's imports of other engine modules: `from impact.engine.<module> import ...`, or
@@ -36,7 +42,8 @@ STAMP = "impact-sources"
 # parsing the sources costs every process a tenth of a second before its first kernel
 _FROM_MODULE = re.compile(r"^\s*from impact\.engine\.(\w+) import", re.MULTILINE)
 _FROM_ENGINE = re.compile(r"^\s*from impact\.engine import (\([^)]*\)|[^\n]*)", re.MULTILINE)
-_USES_NUMBA = re.compile(r"^\s*(import numba|from numba[ .])", re.MULTILINE)
+# (an import of numba's caching alone, this module's, keeps the cache and adds nothing to what kernels compute)
+_USES_NUMBA = re.compile(r"^\s*(import numba|from numba[ .])(?!.*\bcaching\b)", re.MULTILINE)
 
 
 def _engine_imports(text: str) -> set[str]:
@@ -101,33 +108,55 @@ def _cache_dir() -> Path:
 
 @contextlib.contextmanager
 def compile_lock(what: str | None = None, label: str = "", fresh=()):
-    """Exclusive lock on the numba cache folder while kernels compile or load.
+    """Exclusive lock on one kernel of the numba cache folder while it compiles or loads.
 
-    Processes starting together (parallel Snakemake or SLURM jobs) never write
-    the on-disk cache at the same time: the first compiles and stores, the
-    others wait and then load.  (filelock: a well-kept lock that also works
-    where fcntl does not.)
+    Processes starting together (parallel Snakemake or SLURM jobs, `impact compile`'s workers) never compile
+    one kernel twice: the first compiles and stores it, the others wait and then load, while a process wanting
+    another kernel compiles that one beside it.  (filelock: a well-kept lock that also works where fcntl does
+    not.)
 
-    what: a short name of the kernels the block compiles or loads (safe in a
-    file name), label: what a person reads.  The first time they compile for
-    these sources, one line on stderr says so, since it takes a minute or two
-    and happens once: later processes load them from the cache.  fresh: the
-    dispatchers the block calls, whose caches are dropped first if the
-    engine's sources changed since they were written.
+    what: a short name of the kernels the block compiles or loads (safe in a file name; None: the block only
+    drops a stale cache), label: what a person reads.  The first time they compile for these sources, one line on
+    stderr says so, since it takes a minute or two and happens once: later processes load them from the cache.
+    fresh: the dispatchers the block calls, whose caches are dropped first if the engine's sources changed since
+    they were written.
     """
     folder = _cache_dir()
     folder.mkdir(parents=True, exist_ok=True)
-    stamp = folder / f"compiled-{what}-{sources_digest()}.stamp" if what else None
-    with filelock.FileLock(folder / "impact-jit.lock"):
+    with filelock.FileLock(folder / FOLDER_LOCK):
         for dispatcher in fresh:
             purge_stale_cache(dispatcher)
-        if stamp is not None and not stamp.exists():
+    if what is None:
+        yield
+        return
+    stamp = folder / f"compiled-{what}-{sources_digest()}.stamp"
+    with filelock.FileLock(folder / f"impact-jit-{what}.lock"):
+        if not stamp.exists():
             _say(f"impact: compiling {label or what} (once: later runs load it from {folder}; this takes a minute "
                  "or two)")
         yield
-        if stamp is not None:
-            with contextlib.suppress(OSError):  # a read-only cache: numba compiled in memory
-                stamp.touch()
+        with contextlib.suppress(OSError):  # a read-only cache: numba compiled in memory
+            stamp.touch()
+
+
+def _serialised_save(save):
+    """numba writes a function's cache index by reading it, adding the new overload and writing it back, and names
+    the overload's data file by the index it read.  Two kernels compiling side by side compile the steps they share
+    each for its own types, so two processes may save to one index at once: each would write it without the other's
+    overload, or give two overloads one data file.  Under the folder's lock the second save reads the first's
+    index."""
+
+    @functools.wraps(save)
+    def locked(self, key, data):
+        with filelock.FileLock(Path(self._cache_path) / FOLDER_LOCK):
+            save(self, key, data)
+
+    locked.serialised = True
+    return locked
+
+
+if not getattr(numba_caching.IndexDataCacheFile.save, "serialised", False):
+    numba_caching.IndexDataCacheFile.save = _serialised_save(numba_caching.IndexDataCacheFile.save)
 
 
 def _say(line: str) -> None:

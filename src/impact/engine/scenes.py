@@ -509,11 +509,11 @@ def amplitude(result: SceneResult) -> float:
     return result.amplitude
 
 
-def compile_scene_loops(yielding: tuple[bool, ...] = (False,)) -> None:
-    """Compile the specialisations of the scene loop the study runs into numba's cache, by one short run of each:
-    on elastic buildings every one (OPTIONAL_PARTS: with and without pendulums, friction, a harmonic load), on
-    yielding ones those of the collapse stage (a record, no friction, with and without pendulums), and every one
-    of those too with `yielding` holding True (the random scene probe draws them)."""
+def warm_up_scenes(yielding: tuple[bool, ...] = (False,)) -> list[Scene]:
+    """One short scene of each specialisation of the scene loop the study runs: on elastic buildings every one
+    (OPTIONAL_PARTS: with and without pendulums, friction, a harmonic load), on yielding ones those of the collapse
+    stage (a record, no friction, with and without pendulums), and every one of those too with `yielding` holding
+    True (the random scene probe draws them).  Running each compiles it into numba's cache."""
     building = Building.uniform(1, 1.0, 0.05)
     mass = 0.02 * building.total_mass
     loads = (Harmonic(1e3, building.omega1), GroundMotion(np.array([0.0, 1.0, -1.0, 0.0]), 0.1))
@@ -522,9 +522,17 @@ def compile_scene_loops(yielding: tuple[bool, ...] = (False,)) -> None:
     sprung = next(name for name, kind in KINDS.items() if kind.spring and kind.walls)
     every = itertools.product((False, True), (False, True), loads, yielding)
     collapse = () if True in yielding else itertools.product((False, True), (False,), loads[1:], (True,))
+    scenes = []
     for springs, friction, load, yields in itertools.chain(every, collapse):
         dampers = [Damper(sliding, mass, gap=0.01, e=0.5, nu=0.1 if friction else 0.0)]
         if springs:
             dampers.append(Damper(sprung, mass, gap=0.01, e=0.5))
         built = building.yielding(0.01, 0.1) if yields else building
-        simulate_scene(Scene(built, tuple(dampers), load, duration=0.5))
+        scenes.append(Scene(built, tuple(dampers), load, duration=0.5))
+    return scenes
+
+
+def compile_scene_loops(yielding: tuple[bool, ...] = (False,)) -> None:
+    """Compile the specialisations of the scene loop the study runs (:func:`warm_up_scenes`) into numba's cache."""
+    for scene in warm_up_scenes(yielding):
+        simulate_scene(scene)
