@@ -46,9 +46,10 @@ debug: $(STAMP)
 	$(BIN)/snakemake $(TARGET) --force --cores 1 --skip-script-cleanup $(SNAKEMAKE_ARGS)
 	@echo "the job's script, to run alone: $$(ls -t .snakemake/scripts/*.py | head -1)"
 
-# one worker a core (pytest-xdist), each test file on one worker so that its module fixtures run once
+# one worker a core (pytest-xdist), each test file on one worker so that its module fixtures run once, in
+# collection order: the files marked long_file first (tests/conftest.py)
 test: $(COMPILED) chromium
-	$(BIN)/python -m pytest -q -n $(CORES) --dist loadfile
+	$(BIN)/python -m pytest -q -n $(CORES) --dist loadfile --no-loadscope-reorder
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks workflow/scripts tools

@@ -22,6 +22,19 @@ def pytest_sessionstart(session):
         pass
 
 
+def pytest_collection_modifyitems(items):
+    """The files marked long_file first, the longest first, the rest in their order: with a file to a worker
+    (`make test`: xdist's --dist loadfile, in collection order), a file of many minutes started last would leave one
+    worker running it alone at the end.  (A file's minutes, measured on 2 workers on 2026-12-02, are a schedule's
+    hint, not a promise.)"""
+    items.sort(key=lambda item: -_long_file_minutes(item))
+
+
+def _long_file_minutes(item) -> float:
+    mark = item.get_closest_marker("long_file")
+    return mark.kwargs["minutes"] if mark else 0.0
+
+
 @pytest.fixture(scope="module")
 def tool(request):
     """The script tools/<name>.py that a test module names in its TOOL, loaded as a module (tools/ is no package)."""

@@ -461,8 +461,11 @@ def test_the_numerics_pieces_join_into_the_whole_study():
     columns = [c for c in one.columns if c != "wall_time"]
     # a run within a factor of two of its budget (the stiff pendulum's Radau and penalty runs take 10 to 12 s
     # against 10) may finish in one pass and not in the other: that outcome is the machine's speed, not the
-    # code's. Every other run must agree exactly, and the two tables list the same runs in the same order.
+    # code's. Every other run must agree exactly, and the two tables list the same runs in the same order. The
+    # near runs are the stiff pendulum's slow baselines: 4 of 104 on an idle machine, 5 in a suite run on a
+    # loaded one (2026-12-02, LSODA's run at 5.8 s); a tenth of the table leaves room for a loaded machine and
+    # still compares nine runs in ten.
     near = np.maximum(table["wall_time"], one["wall_time"]) > 0.5 * TINY_STUDY["budget"]
-    assert near.sum() <= 4, table.loc[near, ["case", "method", "wall_time"]]
+    assert near.sum() <= len(table) // 10, table.loc[near, ["case", "method", "wall_time"]]
     assert table.loc[~near, columns].equals(one.loc[~near, columns])
     assert table[["case", "method", "setting"]].equals(one[["case", "method", "setting"]])

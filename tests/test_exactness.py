@@ -14,6 +14,8 @@ from impact.model.params import ParameterError, Protocol, System
 from impact.model.records import Record
 from impact.model.scene import Damper, GroundMotion, Harmonic, Scene
 
+pytestmark = pytest.mark.long_file(minutes=6)  # started first, the longest first (conftest)
+
 
 def _drifts(q: np.ndarray, storeys: int) -> np.ndarray:
     """Interstorey drifts of sampled floor displacements (columns 0 .. storeys-1)."""

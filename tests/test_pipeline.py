@@ -18,7 +18,7 @@ from impact.model.scene import DAMPER_KINDS
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.long_file(minutes=11)]  # started first, the longest first (conftest)
 
 
 def _copy_workflow(dest: Path) -> Path:

@@ -36,6 +36,8 @@ import xarray as xr
 import yaml
 from reference import HANG_GUARD_S, copy_workflow
 
+pytestmark = pytest.mark.long_file(minutes=20)  # started first, the longest first (conftest)
+
 ROOT = Path(__file__).resolve().parents[1]
 # CI runs in a fresh clone with shared/ beside the repository
 START_SLURM = ROOT.parent / "shared" / "tools" / "start-slurm.sh"
