@@ -425,6 +425,30 @@ def test_a_run_over_the_threshold_is_timed_once_and_shorter_runs_keep_the_minimu
     assert len(calls) == 3 and best < 0.05
 
 
+def test_the_budget_counts_the_runs_cpu_time_not_the_machines_load():
+    """A run waiting on a loaded machine spends wall time but no CPU time: it is not too slow.  A run computing
+    past its budget is stopped."""
+    import time
+
+    from impact.stages.numerics import plan as NP
+    from impact.stages.numerics import runs as NR
+
+    def waiting():
+        time.sleep(0.3)  # as a run does while other processes hold the cores
+        return {"status": "ok"}
+
+    def computing():
+        t0 = time.process_time()
+        while time.process_time() - t0 < 0.3:
+            pass
+        return {"status": "ok"}
+
+    seconds, out = NR.timed(waiting, 0.05)
+    assert out == {"status": "ok"} and seconds >= 0.3
+    seconds, out = NR.timed(computing, 0.05)
+    assert isinstance(out, NP.Timeout) and TOO_SLOW in str(out) and seconds < 0.3
+
+
 def test_a_baseline_far_slower_than_the_core_is_stopped_there_and_says_so():
     """The cost rule: a baseline run may take budget_over_core times the core's run on the same case (here a
     millionth of it, which no run meets), never the core itself, and it is recorded as too slow."""
@@ -464,7 +488,7 @@ def test_the_numerics_pieces_join_into_the_whole_study():
     # code's. Every other run must agree exactly, and the two tables list the same runs in the same order. The
     # near runs are the stiff pendulum's slow baselines: 4 of 104 on an idle machine, 5 in a suite run on a
     # loaded one (2026-12-02, LSODA's run at 5.8 s); a tenth of the table leaves room for a loaded machine and
-    # still compares nine runs in ten.
+    # still compares nine runs in ten.  (The budget counts CPU time, which a run's wall time bounds from above.)
     near = np.maximum(table["wall_time"], one["wall_time"]) > 0.5 * TINY_STUDY["budget"]
     assert near.sum() <= len(table) // 10, table.loc[near, ["case", "method", "wall_time"]]
     assert table.loc[~near, columns].equals(one.loc[~near, columns])
