@@ -445,8 +445,9 @@ def test_the_budget_counts_the_runs_cpu_time_not_the_machines_load():
 
     seconds, out = NR.timed(waiting, 0.05)
     assert out == {"status": "ok"} and seconds >= 0.3
-    seconds, out = NR.timed(computing, 0.05)
-    assert isinstance(out, NP.Timeout) and TOO_SLOW in str(out) and seconds < 0.3
+    spent = time.process_time()
+    _, out = NR.timed(computing, 0.05)
+    assert isinstance(out, NP.Timeout) and TOO_SLOW in str(out) and time.process_time() - spent < 0.2
 
 
 def test_a_baseline_far_slower_than_the_core_is_stopped_there_and_says_so():

@@ -5,8 +5,8 @@ Work-precision: every integrator (the exact core and the baselines of
 (tolerance, step, contact stiffness); its errors are measured against the
 exact core, and its wall time is the minimum of several repeats after a
 warm-up (one timed run is enough for a run longer than a second).  Every run
-has a budget of CPU time (the machine's other load is no slowness): over it, the run is recorded as failed, "too slow at this
-setting".  The work splits into one piece per case and method family
+has a budget of CPU time (the machine's other load is no slowness): over it,
+the run is recorded as failed, "too slow at this setting".  The work splits into one piece per case and method family
 (:data:`FAMILIES`), which the workflow runs as parallel jobs and
 :func:`combine_work_precision` joins.  For the irregular (chaotic) case the predictability horizon is
 measured first (runs perturbed at round-off diverge) and errors are compared
