@@ -392,7 +392,9 @@ def test_a_baseline_over_budget_is_recorded_as_failed_too_slow():
     from impact.stages.numerics import runs as NR
     from impact.stages.numerics import tables as NT
 
-    tight = {**TINY_STUDY, "budget": 1e-4}  # no solve_ivp run of 2 periods finishes in 0.1 ms
+    # no run of 50 periods finishes in 0.1 ms of CPU time: the fastest solve_ivp run takes 0.16 s, far over the
+    # tick (1 to 10 ms) at which the kernel checks a CPU timer; 2 periods took 8 ms, and one run in 52 finished
+    tight = {**TINY_STUDY, "budget": 1e-4, "periods": 50, "stability_periods": 50}
     runs = NR.stability_runs(tight, families=["ivp"])
     ivp = [m for m in NP.stability_methods(tight) if m.startswith("ivp_")]
     assert sorted(set(runs["method"])) == sorted(ivp) and len(runs) == len(ivp) * len(NP.extreme_cases(tight))
@@ -456,7 +458,7 @@ def test_a_baseline_far_slower_than_the_core_is_stopped_there_and_says_so():
     from impact.stages.numerics import plan as NP
     from impact.stages.numerics import runs as NR
 
-    far = {**TINY_STUDY, "budget_over_core": 1e-6}
+    far = {**TINY_STUDY, "budget_over_core": 1e-6, "stability_periods": 50}  # runs far over a timer's tick
     assert NP.run_budget(far, 0.002) == pytest.approx(2e-9) and NP.run_budget(TINY_STUDY, 0.002) == 10
     assert NP.run_budget({"budget": 10}, 0.002) == pytest.approx(10)  # 1e4 x 2 ms is 20 s: the budget rules
     runs = NR.stability_runs(far, families=["ivp", "core"])
