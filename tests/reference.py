@@ -93,8 +93,9 @@ def smoke_digest(results) -> dict:
     points move by 2 % and 0.4 %, where a 1e-15 phase shift moves them by 8 % and 0.5 % with the old
     kernel).  The smoke study leaves the stiff pendulum out of its stability table (config/smoke.yaml): its
     baseline runs take 2-10 s there, as long as any budget, so which of them failed for time depended on
-    the machine's speed.  Every run left takes at most 1.1 s of CPU time against a 5 s budget of CPU time
-    (wall time until 2026-12-03, when a loaded CI machine stretched one run to 5.0 s).  Regenerated again for the
+    the machine's speed.  Every run left takes at most 1.1 s of CPU time alone (1.2 s beside two other busy
+    processes) against a 5 s budget of CPU time (wall time until 2026-12-03, when a loaded CI machine
+    stretched one run to 5.0 s).  Regenerated again for the
     event search of issue 29 (a Newton step creeping over a plateau of round-off now halves its bracket; a
     unit's escape from a wall stays within the time it needs to cross its gap): 290 of 940 entries changed in
     their last digits, 27 beyond the 1e-9 this test allows.

@@ -32,6 +32,13 @@ class _Help(argparse.HelpFormatter):
         return f"{text} (default %(default)s)"
 
 
+def _usable_cores() -> int:
+    # sched_getaffinity honours a CPU set (a container, taskset); macOS lacks it
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
+
+
 def _ranged(lo: float, hi: float, *, lo_open=False, hi_open=False, kind=float):
     """An argparse type accepting numbers in [lo, hi] (open ends as asked)."""
 
@@ -306,7 +313,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="F0/K")
 
     co = sub.add_parser("compile", help="compile every kernel the study runs, once (make setup does)")
-    co.add_argument("--cores", type=_ranged(1, 256, kind=int), default=len(os.sched_getaffinity(0)),
+    co.add_argument("--cores", type=_ranged(1, 256, kind=int), default=_usable_cores(),
                     help="processes compiling side by side, in [1, 256] (default: the cores this process may use)")
 
     va = sub.add_parser("verify-archive", help="re-check a study archive against its MANIFEST.json (exit 1 if any entry differs)")

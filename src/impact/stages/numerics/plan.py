@@ -18,9 +18,10 @@ FAMILIES = ("core", "ivp", "rk4", "moreau_jean", "penalty")
 # The cost rule (the configuration's numerics section states it too): each run costs only what it shows.  A run
 # longer than repeat_below is timed once, its timer's noise being far below its time; a shorter one keeps the
 # minimum of `repeats`.  A baseline run stops at budget_over_core times the exact core's time on the same run
-# (by then it has shown it is that much slower), or at `budget` seconds, whichever comes first.
+# (by then it has shown it is that much slower), or at `budget` seconds, whichever comes first; both count the
+# process's CPU time, which a loaded machine does not stretch as it does wall time.
 DEFAULT_REPEAT_BELOW = 0.1   # s
-DEFAULT_BUDGET = 10.0        # s per run
+DEFAULT_BUDGET = 10.0        # s of CPU time per run
 DEFAULT_BUDGET_OVER_CORE = 1.0e4
 
 
